@@ -1,0 +1,272 @@
+//! The scene as the renderer sees it, loaded from glTF 2.0 per `../shared/CONVENTIONS.md`.
+//!
+//! Geometry stays in object space (one shared vertex and index buffer); instances place
+//! primitives in the world, so nodes can move between frames without re-uploading vertices.
+
+use glam::{Mat4, Vec3, Vec4};
+use std::path::PathBuf;
+
+mod load;
+pub use load::load;
+
+/// One vertex as uploaded to the GPU (std430-compatible, 48 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Vertex {
+    pub position: [f32; 3],
+    pub normal: [f32; 3],
+    pub uv: [f32; 2],
+    /// xyz tangent, w handedness (+1 or -1), per the glTF spec.
+    pub tangent: [f32; 4],
+}
+
+/// A range of the shared index buffer drawn with one material. Index values are absolute
+/// (already offset into `Scene::vertices`).
+#[derive(Clone, Debug)]
+pub struct Primitive {
+    pub first_index: u32,
+    pub index_count: u32,
+    pub material: u32,
+    /// Object-space bounds of the primitive.
+    pub bounds: Aabb,
+}
+
+/// A primitive placed in the world by a node.
+#[derive(Clone, Debug)]
+pub struct Instance {
+    pub primitive: u32,
+    pub node: usize,
+    pub node_name: Option<String>,
+    pub world: Mat4,
+}
+
+impl Instance {
+    /// Negative-determinant transforms mirror the mesh, flipping its winding.
+    pub fn flips_winding(&self) -> bool {
+        self.world.determinant() < 0.0
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AlphaMode {
+    Opaque,
+    Mask(f32),
+    Blend,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TexRef {
+    /// Index into `Scene::textures`.
+    pub texture: u32,
+    /// Which TEXCOORD set; only 0 is uploaded, others fall back to 0 with a warning.
+    pub tex_coord: u32,
+}
+
+/// glTF metallic-roughness material with the extensions the renderer reads.
+#[derive(Clone, Debug)]
+pub struct Material {
+    pub name: Option<String>,
+    pub base_color: Vec4,
+    pub base_color_tex: Option<TexRef>,
+    pub metallic: f32,
+    pub roughness: f32,
+    /// Roughness in G, metalness in B (linear).
+    pub metallic_roughness_tex: Option<TexRef>,
+    pub normal_tex: Option<TexRef>,
+    pub normal_scale: f32,
+    /// emissiveFactor x KHR_materials_emissive_strength (radiance, HDR).
+    pub emissive: Vec3,
+    pub emissive_tex: Option<TexRef>,
+    /// KHR_materials_specular specularFactor (default 1).
+    pub specular_factor: f32,
+    /// Specular factor in the A channel (linear).
+    pub specular_tex: Option<TexRef>,
+    /// KHR_materials_specular specularColorFactor (default 1,1,1).
+    pub specular_color: Vec3,
+    pub specular_color_tex: Option<TexRef>,
+    pub alpha_mode: AlphaMode,
+    pub double_sided: bool,
+}
+
+impl Default for Material {
+    /// The glTF default material.
+    fn default() -> Self {
+        Material {
+            name: None,
+            base_color: Vec4::ONE,
+            base_color_tex: None,
+            metallic: 1.0,
+            roughness: 1.0,
+            metallic_roughness_tex: None,
+            normal_tex: None,
+            normal_scale: 1.0,
+            emissive: Vec3::ZERO,
+            emissive_tex: None,
+            specular_factor: 1.0,
+            specular_tex: None,
+            specular_color: Vec3::ONE,
+            specular_color_tex: None,
+            alpha_mode: AlphaMode::Opaque,
+            double_sided: false,
+        }
+    }
+}
+
+impl Material {
+    pub fn is_emissive(&self) -> bool {
+        self.emissive.max_element() > 0.0
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Wrap {
+    Repeat,
+    MirroredRepeat,
+    ClampToEdge,
+}
+
+/// A decoded image in one colour space, with its sampler. An image used both as sRGB colour
+/// and as linear data appears twice.
+#[derive(Clone, Debug)]
+pub struct Texture {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+    /// Tightly packed RGBA8 texels, row 0 first.
+    pub rgba8: Vec<u8>,
+    pub srgb: bool,
+    pub wrap_s: Wrap,
+    pub wrap_t: Wrap,
+    /// Nearest magnification filter (else linear).
+    pub mag_nearest: bool,
+    /// Nearest minification filter (else linear); mipmapping is always on.
+    pub min_nearest: bool,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightKind {
+    Directional,
+    Point,
+    /// Cone angles in radians, 0 <= inner <= outer <= pi/2.
+    Spot {
+        inner_cone: f32,
+        outer_cone: f32,
+    },
+}
+
+/// A KHR_lights_punctual light, read radiometrically (CONVENTIONS.md).
+#[derive(Clone, Debug)]
+pub struct Light {
+    pub name: Option<String>,
+    pub kind: LightKind,
+    /// intensity x color: W/sr for point and spot, W/m^2 for directional.
+    pub radiance: Vec3,
+    pub range: Option<f32>,
+    pub position: Vec3,
+    /// Unit world direction the light shines along (the node's -Z axis).
+    pub direction: Vec3,
+}
+
+#[derive(Clone, Debug)]
+pub struct Camera {
+    pub name: Option<String>,
+    /// Camera-to-world transform (the camera looks along its -Z, +Y up).
+    pub world: Mat4,
+    /// Vertical field of view in radians.
+    pub yfov: f32,
+    pub znear: f32,
+    pub zfar: f32,
+    /// True when no camera was in the file and the CONVENTIONS.md default was built.
+    pub is_default: bool,
+}
+
+impl Camera {
+    pub fn eye(&self) -> Vec3 {
+        self.world.w_axis.truncate()
+    }
+    pub fn view(&self) -> Mat4 {
+        self.world.inverse()
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Aabb {
+    pub const EMPTY: Aabb = Aabb {
+        min: Vec3::splat(f32::INFINITY),
+        max: Vec3::splat(f32::NEG_INFINITY),
+    };
+    pub fn is_empty(&self) -> bool {
+        self.min.x > self.max.x || self.min.y > self.max.y || self.min.z > self.max.z
+    }
+    pub fn extend(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+    pub fn union(&self, o: &Aabb) -> Aabb {
+        Aabb {
+            min: self.min.min(o.min),
+            max: self.max.max(o.max),
+        }
+    }
+    pub fn center(&self) -> Vec3 {
+        (self.min + self.max) * 0.5
+    }
+    pub fn extent(&self) -> Vec3 {
+        self.max - self.min
+    }
+    /// World bounds of this box under a transform.
+    pub fn transformed(&self, m: &Mat4) -> Aabb {
+        let mut out = Aabb::EMPTY;
+        if self.is_empty() {
+            return out;
+        }
+        for i in 0..8 {
+            let p = Vec3::new(
+                if i & 1 == 0 { self.min.x } else { self.max.x },
+                if i & 2 == 0 { self.min.y } else { self.max.y },
+                if i & 4 == 0 { self.min.z } else { self.max.z },
+            );
+            out.extend(m.transform_point3(p));
+        }
+        out
+    }
+}
+
+/// A loaded scene. `warnings` lists what was tolerated (and how) while loading.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub source: PathBuf,
+    pub vertices: Vec<Vertex>,
+    pub indices: Vec<u32>,
+    pub primitives: Vec<Primitive>,
+    pub instances: Vec<Instance>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    pub lights: Vec<Light>,
+    pub camera: Camera,
+    /// World bounds of all instances (EMPTY for an empty scene).
+    pub bounds: Aabb,
+    pub warnings: Vec<String>,
+}
+
+impl Scene {
+    pub fn triangle_count(&self) -> usize {
+        self.instances
+            .iter()
+            .map(|i| self.primitives[i.primitive as usize].index_count as usize / 3)
+            .sum()
+    }
+}
+
+/// A scene file that cannot be used. The message names the file and the problem.
+#[derive(Debug, thiserror::Error)]
+#[error("{path}: {problem}")]
+pub struct SceneError {
+    pub path: PathBuf,
+    pub problem: String,
+}
