@@ -2,3 +2,9 @@
 //! on Vulkan.
 
 pub mod scene;
+pub mod vk;
+
+/// SPIR-V of the shaders in glsl/, compiled by build.rs.
+pub mod shaders {
+    include!(concat!(env!("OUT_DIR"), "/shaders.rs"));
+}

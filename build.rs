@@ -1,0 +1,75 @@
+//! Compiles every shader in glsl/ to SPIR-V with shaderc; the binary embeds the results.
+//! `#include "file.glsl"` resolves relative to glsl/. A shader error fails the build with the
+//! file and line.
+
+use std::path::{Path, PathBuf};
+
+fn main() {
+    let glsl = Path::new("glsl");
+    println!("cargo:rerun-if-changed=glsl");
+    let out_dir = PathBuf::from(std::env::var("OUT_DIR").unwrap());
+    let compiler = shaderc::Compiler::new().expect("shaderc: cannot create a compiler");
+
+    let mut entries: Vec<PathBuf> = std::fs::read_dir(glsl)
+        .expect("glsl/ is missing")
+        .map(|e| e.unwrap().path())
+        .collect();
+    entries.sort();
+
+    let mut table = String::from("/// (file name, SPIR-V bytes) of every shader in glsl/.\n");
+    table.push_str("pub static SPIRV: &[(&str, &[u8])] = &[\n");
+    let mut failures = Vec::new();
+    for path in entries {
+        println!("cargo:rerun-if-changed={}", path.display());
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        let kind = match path.extension().and_then(|e| e.to_str()) {
+            Some("vert") => shaderc::ShaderKind::Vertex,
+            Some("frag") => shaderc::ShaderKind::Fragment,
+            Some("geom") => shaderc::ShaderKind::Geometry,
+            Some("comp") => shaderc::ShaderKind::Compute,
+            _ => continue, // includes (.glsl) are compiled as part of the shaders that use them
+        };
+        let source = std::fs::read_to_string(&path).unwrap();
+        let mut options = shaderc::CompileOptions::new().unwrap();
+        options.set_target_env(
+            shaderc::TargetEnv::Vulkan,
+            shaderc::EnvVersion::Vulkan1_3 as u32,
+        );
+        options.set_optimization_level(shaderc::OptimizationLevel::Performance);
+        options.set_generate_debug_info();
+        options.set_include_callback(|requested, _ty, requester, _depth| {
+            let file = glsl.join(requested);
+            match std::fs::read_to_string(&file) {
+                Ok(content) => Ok(shaderc::ResolvedInclude {
+                    resolved_name: file.display().to_string(),
+                    content,
+                }),
+                Err(e) => Err(format!(
+                    "{requester}: cannot include {}: {e}",
+                    file.display()
+                )),
+            }
+        });
+        let display = path.display().to_string();
+        match compiler.compile_into_spirv(&source, kind, &display, "main", Some(&options)) {
+            Ok(artifact) => {
+                let spv = out_dir.join(format!("{name}.spv"));
+                std::fs::write(&spv, artifact.as_binary_u8()).unwrap();
+                table.push_str(&format!(
+                    "    ({name:?}, include_bytes!({:?})),\n",
+                    spv.display().to_string()
+                ));
+            }
+            Err(e) => failures.push(e.to_string()),
+        }
+    }
+    if !failures.is_empty() {
+        // shaderc's messages read "glsl/file.frag:LINE: error: ..."
+        for f in &failures {
+            eprintln!("{f}");
+        }
+        panic!("shader compilation failed:\n{}", failures.join("\n"));
+    }
+    table.push_str("];\n");
+    std::fs::write(out_dir.join("shaders.rs"), table).unwrap();
+}

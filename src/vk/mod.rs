@@ -1,0 +1,51 @@
+//! The Vulkan layer: context, RAII resources, passes with declared accesses, timings.
+
+mod context;
+pub mod graph;
+mod resources;
+mod timing;
+
+pub use context::{Context, ContextDesc, DeviceInfo, MessageStats};
+pub use graph::{Access, Graph, ResourceStates};
+pub use resources::{Buffer, Image, ImageDesc, Sampler};
+pub use timing::PassTimer;
+
+pub use ash::vk;
+
+/// Errors of the Vulkan layer.
+#[derive(Debug, thiserror::Error)]
+pub enum VkError {
+    #[error("cannot load the Vulkan loader (libvulkan.so.1): {0}")]
+    Loader(String),
+    #[error("{call} failed: {result}")]
+    Call {
+        call: &'static str,
+        result: vk::Result,
+    },
+    #[error("no Vulkan device is usable: {0}")]
+    NoDevice(String),
+    #[error("the Vulkan device {device} lacks what the renderer needs: {missing}")]
+    Missing { device: String, missing: String },
+    #[error("the Khronos validation layer (VK_LAYER_KHRONOS_validation) was asked for but is not installed")]
+    NoValidationLayer,
+    #[error("GPU memory allocation {name:?} failed: {source}")]
+    Alloc {
+        name: String,
+        source: gpu_allocator::AllocationError,
+    },
+    #[error("shader {0} is not among the compiled shaders")]
+    NoShader(String),
+}
+
+pub type VkResult<T> = Result<T, VkError>;
+
+/// Maps a raw `vk::Result` into a `VkError` naming the call.
+pub(crate) trait Check<T> {
+    fn check(self, call: &'static str) -> VkResult<T>;
+}
+
+impl<T> Check<T> for Result<T, vk::Result> {
+    fn check(self, call: &'static str) -> VkResult<T> {
+        self.map_err(|result| VkError::Call { call, result })
+    }
+}
