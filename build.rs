@@ -31,9 +31,10 @@ fn main() {
         };
         let source = std::fs::read_to_string(&path).unwrap();
         let mut options = shaderc::CompileOptions::new().unwrap();
+        // SPIR-V 1.5: 1.6 would declare LocalSizeId, which needs the maintenance4 feature.
         options.set_target_env(
             shaderc::TargetEnv::Vulkan,
-            shaderc::EnvVersion::Vulkan1_3 as u32,
+            shaderc::EnvVersion::Vulkan1_2 as u32,
         );
         options.set_optimization_level(shaderc::OptimizationLevel::Performance);
         options.set_generate_debug_info();

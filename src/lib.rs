@@ -1,6 +1,8 @@
 //! voxgi: real-time global illumination by deferred voxel shading (Villegas and Ramirez, 2016)
 //! on Vulkan.
 
+pub mod output;
+pub mod render;
 pub mod scene;
 pub mod vk;
 

@@ -233,10 +233,6 @@ fn missing_requirements(
     let checks = [
         (f.geometry_shader, "geometryShader"),
         (f.fragment_stores_and_atomics, "fragmentStoresAndAtomics"),
-        (
-            f.shader_sampled_image_array_dynamic_indexing,
-            "shaderSampledImageArrayDynamicIndexing",
-        ),
         (f.sampler_anisotropy, "samplerAnisotropy"),
         (f.depth_clamp, "depthClamp"),
         (f13.dynamic_rendering, "dynamicRendering"),
@@ -384,8 +380,7 @@ impl Context {
         let mut chosen = None;
         for (pd, props) in &candidates {
             let missing = missing_requirements(&instance, *pd, props, &desc.device_extensions);
-            let families =
-                unsafe { instance.get_physical_device_queue_family_properties(*pd) };
+            let families = unsafe { instance.get_physical_device_queue_family_properties(*pd) };
             let family = families.iter().position(|q| {
                 q.queue_flags
                     .contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)
@@ -399,8 +394,7 @@ impl Context {
                 (false, _) => rejected.push((device_name(props), missing.join(", "))),
             }
         }
-        let Some((physical_device, properties, queue_family, timestamp_valid_bits)) = chosen
-        else {
+        let Some((physical_device, properties, queue_family, timestamp_valid_bits)) = chosen else {
             let (device, missing) = rejected.remove(0);
             return Err(fail(VkError::Missing { device, missing }));
         };
@@ -433,7 +427,6 @@ impl Context {
         let features = vk::PhysicalDeviceFeatures::default()
             .geometry_shader(true)
             .fragment_stores_and_atomics(true)
-            .shader_sampled_image_array_dynamic_indexing(true)
             .sampler_anisotropy(true)
             .depth_clamp(true);
         let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
@@ -555,10 +548,7 @@ impl Context {
             self.submit_and_wait(cmd)?;
             Ok(r)
         })();
-        unsafe {
-            self.device
-                .free_command_buffers(self.one_shot_pool, &[cmd])
-        };
+        unsafe { self.device.free_command_buffers(self.one_shot_pool, &[cmd]) };
         result
     }
 

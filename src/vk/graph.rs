@@ -44,8 +44,18 @@ impl Access {
         use vk::ImageLayout as L;
         use vk::PipelineStageFlags2 as S;
         let (stage, access, layout, writes) = match self {
-            Access::TransferRead => (S::TRANSFER, A::TRANSFER_READ, L::TRANSFER_SRC_OPTIMAL, false),
-            Access::TransferWrite => (S::TRANSFER, A::TRANSFER_WRITE, L::TRANSFER_DST_OPTIMAL, true),
+            Access::TransferRead => (
+                S::TRANSFER,
+                A::TRANSFER_READ,
+                L::TRANSFER_SRC_OPTIMAL,
+                false,
+            ),
+            Access::TransferWrite => (
+                S::TRANSFER,
+                A::TRANSFER_WRITE,
+                L::TRANSFER_DST_OPTIMAL,
+                true,
+            ),
             Access::HostRead => (S::HOST, A::HOST_READ, L::GENERAL, false),
             Access::VertexBuffer => (
                 S::VERTEX_ATTRIBUTE_INPUT,
@@ -208,7 +218,8 @@ pub fn derive(state: &mut State, access: Access, is_image: bool) -> Option<Barri
         b
     } else {
         // Read after write, unless this stage and access already saw the write.
-        let seen = state.read_stages.contains(next.stage) && state.read_access.contains(next.access);
+        let seen =
+            state.read_stages.contains(next.stage) && state.read_access.contains(next.access);
         let b = (state.last_write.is_some() && !seen).then_some(Barrier {
             src_stage: write_stage,
             src_access: write_access,
@@ -261,6 +272,7 @@ pub struct PassBuilder<'g, 'a, 'r> {
     graph: &'g mut Graph<'a>,
     name: &'r str,
     uses: Vec<(Res<'r>, Access)>,
+    timed: bool,
 }
 
 impl<'a> Graph<'a> {
@@ -284,6 +296,7 @@ impl<'a> Graph<'a> {
             graph: self,
             name,
             uses: Vec::new(),
+            timed: true,
         }
     }
 }
@@ -295,6 +308,12 @@ impl<'r> PassBuilder<'_, '_, 'r> {
     }
     pub fn buffer(mut self, buffer: &'r Buffer, access: Access) -> Self {
         self.uses.push((Res::Buffer(buffer), access));
+        self
+    }
+
+    /// No timestamp scope (for passes that only move resources between accesses).
+    pub fn untimed(mut self) -> Self {
+        self.timed = false;
         self
     }
 
@@ -355,7 +374,10 @@ impl<'r> PassBuilder<'_, '_, 'r> {
                 device.cmd_pipeline_barrier2(cmd, &dep);
             }
         }
-        let scope = g.timer.as_mut().map(|t| t.begin(device, cmd, self.name));
+        let scope = match (self.timed, g.timer.as_mut()) {
+            (true, Some(t)) => Some(t.begin(device, cmd, self.name)),
+            _ => None,
+        };
         let r = body(cmd);
         if let (Some(t), Some(scope)) = (g.timer.as_mut(), scope) {
             t.end(device, cmd, scope);
@@ -403,7 +425,9 @@ mod tests {
         assert!(b
             .src_stage
             .contains(vk::PipelineStageFlags2::VERTEX_ATTRIBUTE_INPUT));
-        assert!(b.src_stage.contains(vk::PipelineStageFlags2::COMPUTE_SHADER));
+        assert!(b
+            .src_stage
+            .contains(vk::PipelineStageFlags2::COMPUTE_SHADER));
         assert!(b.src_stage.contains(vk::PipelineStageFlags2::TRANSFER));
     }
 
@@ -420,9 +444,14 @@ mod tests {
         derive(&mut s, Access::ColorAttachmentWrite, true);
         let b = derive(&mut s, Access::ComputeSampled, true).unwrap();
         assert_eq!(b.new_layout, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
-        assert_eq!(b.src_access, vk::AccessFlags2::COLOR_ATTACHMENT_WRITE | vk::AccessFlags2::COLOR_ATTACHMENT_READ);
+        assert_eq!(
+            b.src_access,
+            vk::AccessFlags2::COLOR_ATTACHMENT_WRITE | vk::AccessFlags2::COLOR_ATTACHMENT_READ
+        );
         let b = derive(&mut s, Access::TransferRead, true).unwrap();
         assert_eq!(b.old_layout, vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
-        assert!(b.src_stage.contains(vk::PipelineStageFlags2::COMPUTE_SHADER));
+        assert!(b
+            .src_stage
+            .contains(vk::PipelineStageFlags2::COMPUTE_SHADER));
     }
 }

@@ -69,7 +69,13 @@ impl Buffer {
         data: &[u8],
         usage: vk::BufferUsageFlags,
     ) -> VkResult<Buffer> {
-        let mut b = Buffer::new(ctx, name, data.len() as u64, usage, MemoryLocation::CpuToGpu)?;
+        let mut b = Buffer::new(
+            ctx,
+            name,
+            data.len() as u64,
+            usage,
+            MemoryLocation::CpuToGpu,
+        )?;
         b.write(0, data);
         Ok(b)
     }
@@ -112,6 +118,8 @@ pub struct ImageDesc {
     pub array_layers: u32,
     pub usage: vk::ImageUsageFlags,
     pub flags: vk::ImageCreateFlags,
+    /// View the whole image as a 2D array (even with one layer).
+    pub array_view: bool,
 }
 
 impl ImageDesc {
@@ -128,6 +136,7 @@ impl ImageDesc {
             array_layers: 1,
             usage,
             flags: vk::ImageCreateFlags::empty(),
+            array_view: false,
         }
     }
     pub fn d3(format: vk::Format, size: u32, usage: vk::ImageUsageFlags) -> Self {
@@ -147,6 +156,7 @@ impl ImageDesc {
     }
     pub fn layers(mut self, layers: u32) -> Self {
         self.array_layers = layers;
+        self.array_view = true;
         self
     }
 }
@@ -224,10 +234,10 @@ impl Image {
         bound.check("vkBindImageMemory")?;
         ctx.set_name(raw, name);
 
-        let view_type = match (desc.image_type, desc.array_layers) {
+        let view_type = match (desc.image_type, desc.array_view) {
             (vk::ImageType::TYPE_3D, _) => vk::ImageViewType::TYPE_3D,
-            (_, 1) => vk::ImageViewType::TYPE_2D,
-            _ => vk::ImageViewType::TYPE_2D_ARRAY,
+            (_, false) => vk::ImageViewType::TYPE_2D,
+            (_, true) => vk::ImageViewType::TYPE_2D_ARRAY,
         };
         image.view = image.make_view(view_type, 0, desc.array_layers)?;
         if desc.array_layers > 1 {
@@ -257,6 +267,14 @@ impl Image {
                 layer_count: layers,
             });
         unsafe { self.ctx.device.create_image_view(&info, None) }.check("vkCreateImageView")
+    }
+
+    /// A 2D view of one array layer (the whole view for single-layer images).
+    pub fn layer_view(&self, layer: u32) -> vk::ImageView {
+        self.layer_views
+            .get(layer as usize)
+            .copied()
+            .unwrap_or(self.view)
     }
 
     pub fn aspect(&self) -> vk::ImageAspectFlags {

@@ -126,7 +126,10 @@ impl PassTimer {
             .into_iter()
             .enumerate()
             .map(|(i, (n, med, lo, hi))| {
-                (i, format!("  {n:<16} {med:9.3} ms  (min {lo:.3}, max {hi:.3})"))
+                (
+                    i,
+                    format!("  {n:<16} {med:9.3} ms  (min {lo:.3}, max {hi:.3})"),
+                )
             })
             .collect();
         let total: f64 = self.medians().iter().map(|r| r.1).sum();

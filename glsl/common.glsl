@@ -1,0 +1,63 @@
+// Shared declarations: the scene set (set 0) and packing helpers.
+// Layouts match src/render/gpu.rs (std140 uniform, std430 storage).
+#ifndef COMMON_GLSL
+#define COMMON_GLSL
+
+const float PI = 3.14159265358979;
+
+const uint LIGHT_DIRECTIONAL = 0u;
+const uint LIGHT_POINT = 1u;
+const uint LIGHT_SPOT = 2u;
+
+layout(set = 0, binding = 0, std140) uniform Frame {
+    mat4 view_proj;
+    mat4 view;
+    mat4 proj;
+    vec4 eye;         // xyz camera position
+    uvec4 counts;     // x lights, y width, z height, w shadow views
+    vec4 shadow;      // x shadow-map resolution, y normal-offset in texels, z PCF radius in texels
+} frame;
+
+struct Material {
+    vec4 base_color;
+    vec4 emissive;        // rgb radiance (factor x strength), a unused
+    vec4 specular;        // rgb specularColorFactor, a specularFactor
+    vec4 params;          // x metallic, y roughness, z normal scale, w alpha cutoff (< 0: opaque)
+    ivec4 tex0;           // texture present (>= 0): base colour, metallic-roughness, normal, emissive
+    ivec4 tex1;           // x specular (A), y specular colour present; z double-sided flag
+};
+
+layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };
+struct Light {
+    vec4 position_type;   // xyz position, w type
+    vec4 direction_range; // xyz direction the light shines along, w range (0: none)
+    vec4 radiance;        // rgb: W/sr (point, spot) or W/m^2 (directional)
+    vec4 cone;            // x angle scale, y angle offset (glTF), z first shadow view, w view count
+};
+layout(set = 0, binding = 3, std430) readonly buffer Lights { Light lights[]; };
+
+struct ShadowView {
+    mat4 view_proj;
+    vec4 info;            // x 1 if perspective, y texel size (ortho: metres; persp: per metre of depth)
+};
+layout(set = 0, binding = 4, std430) readonly buffer ShadowViews { ShadowView shadow_views[]; };
+
+// Octahedral encoding of unit vectors (two components in [-1, 1]).
+vec2 oct_encode(vec3 n) {
+    n /= abs(n.x) + abs(n.y) + abs(n.z);
+    vec2 e = n.xy;
+    if (n.z < 0.0) {
+        e = (1.0 - abs(n.yx)) * vec2(n.x >= 0.0 ? 1.0 : -1.0, n.y >= 0.0 ? 1.0 : -1.0);
+    }
+    return e;
+}
+
+vec3 oct_decode(vec2 e) {
+    vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    float t = max(-n.z, 0.0);
+    n.x += n.x >= 0.0 ? -t : t;
+    n.y += n.y >= 0.0 ? -t : t;
+    return normalize(n);
+}
+
+#endif

@@ -1,0 +1,51 @@
+#version 450
+// Deferred direct lighting: punctual lights with filtered shadow maps, plus emission, written as
+// linear radiance (RGBA32F).
+#include "common.glsl"
+#include "brdf.glsl"
+#include "lights.glsl"
+
+layout(local_size_x = 8, local_size_y = 8) in;
+
+layout(set = 1, binding = 0) uniform sampler2D gb_position;
+layout(set = 1, binding = 1) uniform sampler2D gb_normals;
+layout(set = 1, binding = 2) uniform sampler2D gb_albedo;
+layout(set = 1, binding = 3) uniform sampler2D gb_emission;
+layout(set = 1, binding = 4) uniform sampler2D gb_specular;
+layout(set = 1, binding = 5) uniform sampler2DArrayShadow shadow_map;
+layout(set = 1, binding = 6, rgba32f) uniform writeonly image2D out_radiance;
+
+void main() {
+    ivec2 px = ivec2(gl_GlobalInvocationID.xy);
+    if (px.x >= int(frame.counts.y) || px.y >= int(frame.counts.z)) return;
+
+    vec4 pos = texelFetch(gb_position, px, 0);
+    if (pos.a == 0.0) {
+        // Background: no environment light in the conventions.
+        imageStore(out_radiance, px, vec4(0.0, 0.0, 0.0, 1.0));
+        return;
+    }
+    vec4 normals = texelFetch(gb_normals, px, 0);
+    vec4 albedo = texelFetch(gb_albedo, px, 0);
+    vec4 emission = texelFetch(gb_emission, px, 0);
+    vec4 spec = texelFetch(gb_specular, px, 0);
+
+    vec3 p = pos.xyz;
+    vec3 n = oct_decode(normals.xy);
+    vec3 geo = oct_decode(normals.zw);
+    vec3 v = normalize(frame.eye.xyz - p);
+    Surface s = Surface(albedo.rgb, albedo.a, emission.a, spec.rgb, spec.a);
+
+    vec3 radiance = emission.rgb;
+    for (uint i = 0u; i < frame.counts.x; i++) {
+        Light light = lights[i];
+        vec3 l;
+        float dist;
+        vec3 e = light_irradiance(light, p, l, dist);
+        float n_dot_l = dot(n, l);
+        if (n_dot_l <= 0.0 || dot(geo, l) <= 0.0 || all(equal(e, vec3(0.0)))) continue;
+        float vis = shadow_visibility(light, p, geo, shadow_map);
+        radiance += brdf(s, n, v, l) * e * n_dot_l * vis;
+    }
+    imageStore(out_radiance, px, vec4(radiance, 1.0));
+}

@@ -1,0 +1,112 @@
+//! CPU mirrors of the GPU structs in glsl/common.glsl (std140 / std430 layouts).
+
+use crate::scene::{AlphaMode, Light, LightKind, Material, TexRef};
+use glam::{Mat4, Vec4};
+
+/// Reinterprets plain-old-data as bytes for upload.
+pub fn as_bytes<T: Copy>(data: &[T]) -> &[u8] {
+    // SAFETY: T is Copy plain data with repr(C) layout; the slice covers exactly its memory.
+    unsafe { std::slice::from_raw_parts(data.as_ptr() as *const u8, std::mem::size_of_val(data)) }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FrameUniforms {
+    pub view_proj: Mat4,
+    pub view: Mat4,
+    pub proj: Mat4,
+    pub eye: Vec4,
+    /// lights, width, height, shadow views
+    pub counts: [u32; 4],
+    /// shadow-map resolution, normal offset in texels, PCF radius in texels, unused
+    pub shadow: Vec4,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct GpuMaterial {
+    pub base_color: Vec4,
+    pub emissive: Vec4,
+    pub specular: Vec4,
+    pub params: Vec4,
+    pub tex0: [i32; 4],
+    pub tex1: [i32; 4],
+}
+
+fn tex(t: &Option<TexRef>) -> i32 {
+    t.map(|t| t.texture as i32).unwrap_or(-1)
+}
+
+impl GpuMaterial {
+    pub fn from_material(m: &Material) -> Self {
+        let cutoff = match m.alpha_mode {
+            AlphaMode::Mask(c) => c,
+            // BLEND is drawn opaque: the renderer has no transparency pass.
+            AlphaMode::Opaque | AlphaMode::Blend => -1.0,
+        };
+        GpuMaterial {
+            base_color: m.base_color,
+            emissive: m.emissive.extend(0.0),
+            specular: m.specular_color.extend(m.specular_factor),
+            params: Vec4::new(m.metallic, m.roughness, m.normal_scale, cutoff),
+            tex0: [
+                tex(&m.base_color_tex),
+                tex(&m.metallic_roughness_tex),
+                tex(&m.normal_tex),
+                tex(&m.emissive_tex),
+            ],
+            tex1: [
+                tex(&m.specular_tex),
+                tex(&m.specular_color_tex),
+                m.double_sided as i32,
+                0,
+            ],
+        }
+    }
+}
+
+pub const LIGHT_DIRECTIONAL: f32 = 0.0;
+pub const LIGHT_POINT: f32 = 1.0;
+pub const LIGHT_SPOT: f32 = 2.0;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct GpuLight {
+    pub position_type: Vec4,
+    pub direction_range: Vec4,
+    pub radiance: Vec4,
+    /// angle scale, angle offset, first shadow view, shadow view count
+    pub cone: Vec4,
+}
+
+impl GpuLight {
+    pub fn from_light(l: &Light, first_view: u32, views: u32) -> Self {
+        let (ty, scale, offset) = match l.kind {
+            LightKind::Directional => (LIGHT_DIRECTIONAL, 0.0, 0.0),
+            LightKind::Point => (LIGHT_POINT, 0.0, 0.0),
+            LightKind::Spot {
+                inner_cone,
+                outer_cone,
+            } => {
+                // KHR_lights_punctual's recommended falloff; the 0.001 floor keeps inner == outer
+                // finite (a hard edge).
+                let scale = 1.0 / (inner_cone.cos() - outer_cone.cos()).max(0.001);
+                (LIGHT_SPOT, scale, -outer_cone.cos() * scale)
+            }
+        };
+        GpuLight {
+            position_type: l.position.extend(ty),
+            direction_range: l.direction.extend(l.range.unwrap_or(0.0)),
+            radiance: l.radiance.extend(0.0),
+            cone: Vec4::new(scale, offset, first_view as f32, views as f32),
+        }
+    }
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct ShadowView {
+    pub view_proj: Mat4,
+    /// 1 if perspective; texel size (metres for ortho, per metre of depth for perspective)
+    pub info: Vec4,
+}

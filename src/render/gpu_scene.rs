@@ -1,0 +1,356 @@
+//! The scene on the GPU: geometry, materials, textures with mip chains, lights and their
+//! shadow views. Uploaded once through a staging buffer.
+
+use super::gpu::{as_bytes, GpuLight, GpuMaterial, ShadowView};
+use super::shadows::{light_views, LightViews};
+use crate::scene::{Scene, Texture, Wrap};
+use crate::vk::{
+    vk, Access, Buffer, Context, Graph, Image, ImageDesc, ResourceStates, Sampler, VkResult,
+};
+use gpu_allocator::MemoryLocation;
+use std::collections::HashMap;
+use std::sync::Arc;
+
+pub struct GpuScene {
+    pub vertices: Buffer,
+    pub indices: Buffer,
+    pub materials: Buffer,
+    pub lights: Buffer,
+    pub shadow_views: Buffer,
+    pub textures: Vec<Image>,
+    /// Which sampler each texture uses.
+    pub texture_samplers: Vec<usize>,
+    pub samplers: Vec<Sampler>,
+    pub light_views: Vec<LightViews>,
+    pub shadow_view_count: u32,
+}
+
+impl GpuScene {
+    /// The 1x1 white texture (the last one).
+    pub fn white(&self) -> usize {
+        self.textures.len() - 1
+    }
+}
+
+/// The mip chain of an RGBA8 image by 2x2 box filtering (in linear light for sRGB data).
+pub fn mip_chain(tex: &Texture) -> Vec<(u32, u32, Vec<u8>)> {
+    let to_linear: Vec<f32> = (0..256)
+        .map(|i| {
+            let c = i as f32 / 255.0;
+            if !tex.srgb {
+                c
+            } else if c <= 0.04045 {
+                c / 12.92
+            } else {
+                ((c + 0.055) / 1.055).powf(2.4)
+            }
+        })
+        .collect();
+    let encode = |v: f32| -> u8 {
+        let v = v.clamp(0.0, 1.0);
+        let e = if !tex.srgb {
+            v
+        } else if v <= 0.0031308 {
+            v * 12.92
+        } else {
+            1.055 * v.powf(1.0 / 2.4) - 0.055
+        };
+        (e * 255.0 + 0.5) as u8
+    };
+    let mut levels = vec![(tex.width, tex.height, tex.rgba8.clone())];
+    loop {
+        let (w, h, prev) = levels.last().unwrap();
+        let (w, h) = (*w, *h);
+        if w == 1 && h == 1 {
+            break;
+        }
+        let (nw, nh) = ((w / 2).max(1), (h / 2).max(1));
+        let mut next = vec![0u8; (nw * nh * 4) as usize];
+        for y in 0..nh {
+            for x in 0..nw {
+                let xs = [(2 * x).min(w - 1), (2 * x + 1).min(w - 1)];
+                let ys = [(2 * y).min(h - 1), (2 * y + 1).min(h - 1)];
+                for c in 0..4 {
+                    let mut sum = 0.0;
+                    for &sy in &ys {
+                        for &sx in &xs {
+                            let v = prev[((sy * w + sx) * 4 + c) as usize];
+                            // Alpha is always linear.
+                            sum += if c == 3 {
+                                v as f32 / 255.0
+                            } else {
+                                to_linear[v as usize]
+                            };
+                        }
+                    }
+                    let avg = sum * 0.25;
+                    next[((y * nw + x) * 4 + c) as usize] = if c == 3 {
+                        (avg.clamp(0.0, 1.0) * 255.0 + 0.5) as u8
+                    } else {
+                        encode(avg)
+                    };
+                }
+            }
+        }
+        levels.push((nw, nh, next));
+    }
+    levels
+}
+
+fn address_mode(w: Wrap) -> vk::SamplerAddressMode {
+    match w {
+        Wrap::Repeat => vk::SamplerAddressMode::REPEAT,
+        Wrap::MirroredRepeat => vk::SamplerAddressMode::MIRRORED_REPEAT,
+        Wrap::ClampToEdge => vk::SamplerAddressMode::CLAMP_TO_EDGE,
+    }
+}
+
+impl GpuScene {
+    pub fn upload(
+        ctx: &Arc<Context>,
+        scene: &Scene,
+        states: &mut ResourceStates,
+        shadow_resolution: u32,
+        pcf_radius: u32,
+    ) -> VkResult<GpuScene> {
+        let usage_dst = vk::BufferUsageFlags::TRANSFER_DST;
+        let mut staging_data: Vec<u8> = Vec::new();
+        let mut stage = |bytes: &[u8]| -> u64 {
+            // 16-byte alignment satisfies every copy's offset rules.
+            while staging_data.len() % 16 != 0 {
+                staging_data.push(0);
+            }
+            let off = staging_data.len() as u64;
+            staging_data.extend_from_slice(bytes);
+            off
+        };
+
+        let vertex_off = stage(as_bytes(&scene.vertices));
+        let index_off = stage(as_bytes(&scene.indices));
+        let vertices = Buffer::new(
+            ctx,
+            "scene vertices",
+            std::mem::size_of_val(scene.vertices.as_slice()) as u64,
+            vk::BufferUsageFlags::VERTEX_BUFFER | usage_dst,
+            MemoryLocation::GpuOnly,
+        )?;
+        let indices = Buffer::new(
+            ctx,
+            "scene indices",
+            std::mem::size_of_val(scene.indices.as_slice()) as u64,
+            vk::BufferUsageFlags::INDEX_BUFFER | usage_dst,
+            MemoryLocation::GpuOnly,
+        )?;
+
+        // Materials, lights and shadow views are small: host-visible buffers, written once.
+        let mats: Vec<GpuMaterial> = scene
+            .materials
+            .iter()
+            .map(GpuMaterial::from_material)
+            .collect();
+        let mats = if mats.is_empty() {
+            vec![GpuMaterial::default()]
+        } else {
+            mats
+        };
+        let materials = Buffer::with_data(
+            ctx,
+            "materials",
+            as_bytes(&mats),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+
+        let views = light_views(&scene.lights, &scene.bounds, shadow_resolution, pcf_radius);
+        let mut gpu_lights: Vec<GpuLight> = scene
+            .lights
+            .iter()
+            .zip(&views)
+            .map(|(l, v)| GpuLight::from_light(l, v.first, v.views.len() as u32))
+            .collect();
+        if gpu_lights.is_empty() {
+            gpu_lights.push(GpuLight::default());
+        }
+        let lights = Buffer::with_data(
+            ctx,
+            "lights",
+            as_bytes(&gpu_lights),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+        let mut all_views: Vec<ShadowView> =
+            views.iter().flat_map(|v| v.views.iter().copied()).collect();
+        let shadow_view_count = all_views.len() as u32;
+        if all_views.is_empty() {
+            all_views.push(ShadowView::default());
+        }
+        let shadow_views = Buffer::with_data(
+            ctx,
+            "shadow views",
+            as_bytes(&all_views),
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+        )?;
+
+        // Textures, then a 1x1 white one bound wherever a material has no texture.
+        let white = Texture {
+            name: "white".into(),
+            width: 1,
+            height: 1,
+            rgba8: vec![255; 4],
+            srgb: false,
+            wrap_s: Wrap::Repeat,
+            wrap_t: Wrap::Repeat,
+            mag_nearest: false,
+            min_nearest: false,
+        };
+        let tex_list: Vec<&Texture> = scene.textures.iter().chain([&white]).collect();
+        let mut textures = Vec::new();
+        let mut regions: Vec<Vec<vk::BufferImageCopy>> = Vec::new();
+        let mut sampler_keys: HashMap<(i32, i32, bool, bool), usize> = HashMap::new();
+        let mut samplers = Vec::new();
+        let mut texture_samplers = Vec::new();
+        for (i, t) in tex_list.iter().enumerate() {
+            let chain = mip_chain(t);
+            let format = if t.srgb {
+                vk::Format::R8G8B8A8_SRGB
+            } else {
+                vk::Format::R8G8B8A8_UNORM
+            };
+            let img = Image::new(
+                ctx,
+                &format!("texture {i} {}", t.name),
+                ImageDesc::d2(
+                    format,
+                    t.width,
+                    t.height,
+                    vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+                )
+                .mips(chain.len() as u32),
+            )?;
+            let mut r = Vec::new();
+            for (level, (w, h, data)) in chain.iter().enumerate() {
+                let off = stage(data);
+                r.push(
+                    vk::BufferImageCopy::default()
+                        .buffer_offset(off)
+                        .image_subresource(vk::ImageSubresourceLayers {
+                            aspect_mask: vk::ImageAspectFlags::COLOR,
+                            mip_level: level as u32,
+                            base_array_layer: 0,
+                            layer_count: 1,
+                        })
+                        .image_extent(vk::Extent3D {
+                            width: *w,
+                            height: *h,
+                            depth: 1,
+                        }),
+                );
+            }
+            regions.push(r);
+            textures.push(img);
+            let key = (
+                address_mode(t.wrap_s).as_raw(),
+                address_mode(t.wrap_t).as_raw(),
+                t.mag_nearest,
+                t.min_nearest,
+            );
+            let idx = match sampler_keys.get(&key) {
+                Some(&i) => i,
+                None => {
+                    let filter = |nearest: bool| {
+                        if nearest {
+                            vk::Filter::NEAREST
+                        } else {
+                            vk::Filter::LINEAR
+                        }
+                    };
+                    let info = vk::SamplerCreateInfo::default()
+                        .mag_filter(filter(t.mag_nearest))
+                        .min_filter(filter(t.min_nearest))
+                        .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+                        .address_mode_u(address_mode(t.wrap_s))
+                        .address_mode_v(address_mode(t.wrap_t))
+                        .address_mode_w(vk::SamplerAddressMode::REPEAT)
+                        .anisotropy_enable(true)
+                        .max_anisotropy(ctx.properties.limits.max_sampler_anisotropy.min(8.0))
+                        .max_lod(vk::LOD_CLAMP_NONE);
+                    samplers.push(Sampler::new(ctx, &info)?);
+                    sampler_keys.insert(key, samplers.len() - 1);
+                    samplers.len() - 1
+                }
+            };
+            texture_samplers.push(idx);
+        }
+
+        let mut staging = Buffer::new(
+            ctx,
+            "scene staging",
+            staging_data.len() as u64,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+        )?;
+        staging.write(0, &staging_data);
+
+        ctx.one_shot(|cmd| {
+            let mut g = Graph::new(ctx, cmd, states, None);
+            let mut pass = g
+                .pass("upload")
+                .buffer(&staging, Access::TransferRead)
+                .buffer(&vertices, Access::TransferWrite)
+                .buffer(&indices, Access::TransferWrite);
+            for t in &textures {
+                pass = pass.image(t, Access::TransferWrite);
+            }
+            pass.record(|cmd| unsafe {
+                let d = &ctx.device;
+                if !scene.vertices.is_empty() {
+                    d.cmd_copy_buffer(
+                        cmd,
+                        staging.raw,
+                        vertices.raw,
+                        &[vk::BufferCopy {
+                            src_offset: vertex_off,
+                            dst_offset: 0,
+                            size: vertices
+                                .size
+                                .min(std::mem::size_of_val(scene.vertices.as_slice()) as u64),
+                        }],
+                    );
+                }
+                if !scene.indices.is_empty() {
+                    d.cmd_copy_buffer(
+                        cmd,
+                        staging.raw,
+                        indices.raw,
+                        &[vk::BufferCopy {
+                            src_offset: index_off,
+                            dst_offset: 0,
+                            size: std::mem::size_of_val(scene.indices.as_slice()) as u64,
+                        }],
+                    );
+                }
+                for (t, r) in textures.iter().zip(&regions) {
+                    d.cmd_copy_buffer_to_image(
+                        cmd,
+                        staging.raw,
+                        t.raw,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        r,
+                    );
+                }
+            });
+        })?;
+        states.forget(staging.raw);
+
+        Ok(GpuScene {
+            vertices,
+            indices,
+            materials,
+            lights,
+            shadow_views,
+            textures,
+            texture_samplers,
+            samplers,
+            light_views: views,
+            shadow_view_count,
+        })
+    }
+}

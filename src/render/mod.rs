@@ -1,0 +1,10 @@
+//! The renderer: shadow maps, G-buffer and deferred lighting, recorded as declared passes.
+
+pub mod gpu;
+mod gpu_scene;
+mod pipelines;
+mod renderer;
+pub mod shadows;
+
+pub use gpu_scene::{mip_chain, GpuScene};
+pub use renderer::{Mode, RenderSettings, Renderer};

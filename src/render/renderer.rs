@@ -1,0 +1,796 @@
+use super::gpu::{as_bytes, FrameUniforms};
+use super::gpu_scene::GpuScene;
+use super::pipelines::{self, DescriptorPool, GraphicsDesc, Pipeline, SetLayout, Spec};
+use crate::scene::{Camera, Material, Scene, TexRef};
+use crate::vk::{
+    vk, Access, Buffer, Context, Graph, Image, ImageDesc, PassTimer, ResourceStates, Sampler,
+    VkError, VkResult,
+};
+use glam::{Mat4, Vec4};
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+/// What the image shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// Punctual lights with shadows, plus emission.
+    Direct,
+}
+
+impl std::str::FromStr for Mode {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "direct" => Ok(Mode::Direct),
+            other => Err(format!(
+                "unknown render mode {other:?} (the modes are: direct)"
+            )),
+        }
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    pub mode: Mode,
+    /// Texels per side of each shadow-map view.
+    pub shadow_resolution: u32,
+    /// PCF kernel radius in texels (a (2r+1)^2 grid of bilinear comparisons).
+    pub pcf_radius: u32,
+    /// Normal offset of shadow lookups, in texels.
+    pub normal_offset: f32,
+    pub timings: bool,
+}
+
+impl Default for RenderSettings {
+    fn default() -> Self {
+        RenderSettings {
+            width: 512,
+            height: 512,
+            mode: Mode::Direct,
+            shadow_resolution: 2048,
+            pcf_radius: 1,
+            normal_offset: 1.5,
+            timings: false,
+        }
+    }
+}
+
+const GBUFFER_FORMATS: [vk::Format; 5] = [
+    vk::Format::R32G32B32A32_SFLOAT,
+    vk::Format::R16G16B16A16_SFLOAT,
+    vk::Format::R16G16B16A16_SFLOAT,
+    vk::Format::R16G16B16A16_SFLOAT,
+    vk::Format::R16G16B16A16_SFLOAT,
+];
+const GBUFFER_NAMES: [&str; 5] = [
+    "gbuffer position",
+    "gbuffer normals",
+    "gbuffer albedo",
+    "gbuffer emission",
+    "gbuffer specular",
+];
+const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
+/// Texture bindings per material (glsl/material.glsl).
+const MATERIAL_TEXTURES: u32 = 6;
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+struct DrawPush {
+    model: Mat4,
+    material: u32,
+    /// G-buffer: bit 0 mirrored transform. Shadow: the shadow view.
+    extra: u32,
+}
+
+/// Renders a scene; owns every GPU object it uses (freed in Drop, the context last).
+pub struct Renderer {
+    pub settings: RenderSettings,
+    pub camera: Camera,
+    /// World transform per scene instance (moving nodes edits these).
+    pub transforms: Vec<Mat4>,
+    instances: Vec<(u32, u32, u32)>, // (first index, index count, material)
+    frame_ubo: Buffer,
+    gbuffer: Vec<Image>,
+    depth: Image,
+    shadow_map: Image,
+    hdr: Image,
+    readback: Buffer,
+    gbuffer_pipeline: Pipeline,
+    shadow_pipeline: Pipeline,
+    lighting_pipeline: Pipeline,
+    _scene_layout: SetLayout,
+    _material_layout: SetLayout,
+    material_sets: Vec<vk::DescriptorSet>,
+    _lighting_layout: SetLayout,
+    _pool: DescriptorPool,
+    scene_set: vk::DescriptorSet,
+    lighting_set: vk::DescriptorSet,
+    _nearest: Sampler,
+    _shadow_sampler: Sampler,
+    gpu: GpuScene,
+    states: ResourceStates,
+    pub timer: Option<PassTimer>,
+    command_pool: vk::CommandPool,
+    cmd: vk::CommandBuffer,
+    /// Test hook: record this pass without its barriers.
+    pub omit_barriers_of: Option<String>,
+    light_count: u32,
+    ctx: Arc<Context>,
+}
+
+impl Renderer {
+    pub fn new(ctx: &Arc<Context>, scene: &Scene, settings: RenderSettings) -> VkResult<Renderer> {
+        let mut states = ResourceStates::default();
+        let gpu = GpuScene::upload(
+            ctx,
+            scene,
+            &mut states,
+            settings.shadow_resolution,
+            settings.pcf_radius,
+        )?;
+        let (w, h) = (settings.width, settings.height);
+
+        let frame_ubo = Buffer::new(
+            ctx,
+            "frame uniforms",
+            std::mem::size_of::<FrameUniforms>() as u64,
+            vk::BufferUsageFlags::UNIFORM_BUFFER,
+            MemoryLocation::CpuToGpu,
+        )?;
+        let gbuffer = GBUFFER_FORMATS
+            .iter()
+            .zip(GBUFFER_NAMES)
+            .map(|(&f, name)| {
+                Image::new(
+                    ctx,
+                    name,
+                    ImageDesc::d2(
+                        f,
+                        w,
+                        h,
+                        vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
+                    ),
+                )
+            })
+            .collect::<VkResult<Vec<_>>>()?;
+        let depth = Image::new(
+            ctx,
+            "gbuffer depth",
+            ImageDesc::d2(
+                DEPTH_FORMAT,
+                w,
+                h,
+                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+            ),
+        )?;
+        // Only the views the lights need; a 1x1 stand-in when nothing casts shadows.
+        let shadow_res = if gpu.shadow_view_count > 0 {
+            settings.shadow_resolution
+        } else {
+            1
+        };
+        let shadow_map = Image::new(
+            ctx,
+            "shadow maps",
+            ImageDesc::d2(
+                DEPTH_FORMAT,
+                shadow_res,
+                shadow_res,
+                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
+            )
+            .layers(gpu.shadow_view_count.max(1)),
+        )?;
+        // Array views even for one layer, as the shader samples a 2D array.
+        let hdr = Image::new(
+            ctx,
+            "radiance",
+            ImageDesc::d2(
+                vk::Format::R32G32B32A32_SFLOAT,
+                w,
+                h,
+                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+            ),
+        )?;
+        let readback = Buffer::new(
+            ctx,
+            "radiance readback",
+            (w * h * 16) as u64,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+
+        let all = vk::ShaderStageFlags::VERTEX
+            | vk::ShaderStageFlags::GEOMETRY
+            | vk::ShaderStageFlags::FRAGMENT
+            | vk::ShaderStageFlags::COMPUTE;
+        let scene_layout = SetLayout::new(
+            ctx,
+            &[
+                (0, vk::DescriptorType::UNIFORM_BUFFER, 1, all),
+                (1, vk::DescriptorType::STORAGE_BUFFER, 1, all),
+                (3, vk::DescriptorType::STORAGE_BUFFER, 1, all),
+                (4, vk::DescriptorType::STORAGE_BUFFER, 1, all),
+            ],
+        )?;
+        let cis = vk::DescriptorType::COMBINED_IMAGE_SAMPLER;
+        let frag = vk::ShaderStageFlags::FRAGMENT;
+        // Per-material textures: lavapipe cannot index sampler arrays dynamically.
+        let material_layout = SetLayout::new(
+            ctx,
+            &(0..MATERIAL_TEXTURES)
+                .map(|b| (b, cis, 1, frag))
+                .collect::<Vec<_>>(),
+        )?;
+        let material_count = scene.materials.len().max(1) as u32;
+        let comp = vk::ShaderStageFlags::COMPUTE;
+        let lighting_layout = SetLayout::new(
+            ctx,
+            &[
+                (0, cis, 1, comp),
+                (1, cis, 1, comp),
+                (2, cis, 1, comp),
+                (3, cis, 1, comp),
+                (4, cis, 1, comp),
+                (5, cis, 1, comp),
+                (6, vk::DescriptorType::STORAGE_IMAGE, 1, comp),
+            ],
+        )?;
+        let pool = DescriptorPool::new(
+            ctx,
+            &[
+                vk::DescriptorPoolSize {
+                    ty: vk::DescriptorType::UNIFORM_BUFFER,
+                    descriptor_count: 1,
+                },
+                vk::DescriptorPoolSize {
+                    ty: vk::DescriptorType::STORAGE_BUFFER,
+                    descriptor_count: 3,
+                },
+                vk::DescriptorPoolSize {
+                    ty: cis,
+                    descriptor_count: material_count * MATERIAL_TEXTURES + 6,
+                },
+                vk::DescriptorPoolSize {
+                    ty: vk::DescriptorType::STORAGE_IMAGE,
+                    descriptor_count: 1,
+                },
+            ],
+            2 + material_count,
+        )?;
+        let scene_set = pool.allocate(&scene_layout)?;
+        let lighting_set = pool.allocate(&lighting_layout)?;
+        let material_sets = (0..material_count)
+            .map(|_| pool.allocate(&material_layout))
+            .collect::<VkResult<Vec<_>>>()?;
+
+        let nearest = Sampler::new(
+            ctx,
+            &vk::SamplerCreateInfo::default()
+                .mag_filter(vk::Filter::NEAREST)
+                .min_filter(vk::Filter::NEAREST)
+                .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE),
+        )?;
+        // Hardware comparison with bilinear filtering: each tap is already a 2x2 PCF.
+        let shadow_sampler = Sampler::new(
+            ctx,
+            &vk::SamplerCreateInfo::default()
+                .mag_filter(vk::Filter::LINEAR)
+                .min_filter(vk::Filter::LINEAR)
+                .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_EDGE)
+                .compare_enable(true)
+                .compare_op(vk::CompareOp::LESS_OR_EQUAL),
+        )?;
+
+        // Descriptor writes.
+        {
+            let buf = |b: &Buffer| {
+                [vk::DescriptorBufferInfo {
+                    buffer: b.raw,
+                    offset: 0,
+                    range: vk::WHOLE_SIZE,
+                }]
+            };
+            let ubo = buf(&frame_ubo);
+            let mats = buf(&gpu.materials);
+            let lights = buf(&gpu.lights);
+            let views = buf(&gpu.shadow_views);
+            let tex_info = |t: Option<TexRef>| {
+                let i = t.map(|t| t.texture as usize).unwrap_or(gpu.white());
+                let i = if i < gpu.textures.len() {
+                    i
+                } else {
+                    gpu.white()
+                };
+                [vk::DescriptorImageInfo {
+                    sampler: gpu.samplers[gpu.texture_samplers[i]].raw,
+                    image_view: gpu.textures[i].view,
+                    image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                }]
+            };
+            let default_material = [Material::default()];
+            let materials = if scene.materials.is_empty() {
+                &default_material[..]
+            } else {
+                &scene.materials[..]
+            };
+            let mat_infos: Vec<[[vk::DescriptorImageInfo; 1]; 6]> = materials
+                .iter()
+                .map(|m| {
+                    [
+                        tex_info(m.base_color_tex),
+                        tex_info(m.metallic_roughness_tex),
+                        tex_info(m.normal_tex),
+                        tex_info(m.emissive_tex),
+                        tex_info(m.specular_tex),
+                        tex_info(m.specular_color_tex),
+                    ]
+                })
+                .collect();
+            let gb_infos: Vec<[vk::DescriptorImageInfo; 1]> = gbuffer
+                .iter()
+                .map(|img| {
+                    [vk::DescriptorImageInfo {
+                        sampler: nearest.raw,
+                        image_view: img.view,
+                        image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                    }]
+                })
+                .collect();
+            let shadow_info = [vk::DescriptorImageInfo {
+                sampler: shadow_sampler.raw,
+                image_view: shadow_map.view,
+                image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+            }];
+            let hdr_info = [vk::DescriptorImageInfo {
+                sampler: vk::Sampler::null(),
+                image_view: hdr.view,
+                image_layout: vk::ImageLayout::GENERAL,
+            }];
+            let w = |set, binding, ty| {
+                vk::WriteDescriptorSet::default()
+                    .dst_set(set)
+                    .dst_binding(binding)
+                    .descriptor_type(ty)
+            };
+            let sb = vk::DescriptorType::STORAGE_BUFFER;
+            let mut writes = vec![
+                w(scene_set, 0, vk::DescriptorType::UNIFORM_BUFFER).buffer_info(&ubo),
+                w(scene_set, 1, sb).buffer_info(&mats),
+                w(scene_set, 3, sb).buffer_info(&lights),
+                w(scene_set, 4, sb).buffer_info(&views),
+                w(lighting_set, 5, cis).image_info(&shadow_info),
+                w(lighting_set, 6, vk::DescriptorType::STORAGE_IMAGE).image_info(&hdr_info),
+            ];
+            for (i, info) in gb_infos.iter().enumerate() {
+                writes.push(w(lighting_set, i as u32, cis).image_info(info));
+            }
+            for (set, infos) in material_sets.iter().zip(&mat_infos) {
+                for (b, info) in infos.iter().enumerate() {
+                    writes.push(w(*set, b as u32, cis).image_info(info));
+                }
+            }
+            unsafe { ctx.device.update_descriptor_sets(&writes, &[]) };
+        }
+
+        let spec = || Spec(vec![]);
+        let push_size = std::mem::size_of::<DrawPush>() as u32;
+        let gbuffer_pipeline = pipelines::graphics(
+            ctx,
+            &GraphicsDesc {
+                name: "gbuffer",
+                shaders: &[
+                    (vk::ShaderStageFlags::VERTEX, "gbuffer.vert"),
+                    (vk::ShaderStageFlags::FRAGMENT, "gbuffer.frag"),
+                ],
+                sets: &[&scene_layout, &material_layout],
+                push_size,
+                spec: spec(),
+                vertex_input: &[0, 1, 2, 3],
+                color_formats: &GBUFFER_FORMATS,
+                depth_format: Some(DEPTH_FORMAT),
+                depth_bias: None,
+                cull: vk::CullModeFlags::NONE,
+            },
+        )?;
+        let shadow_pipeline = pipelines::graphics(
+            ctx,
+            &GraphicsDesc {
+                name: "shadow",
+                shaders: &[
+                    (vk::ShaderStageFlags::VERTEX, "shadow.vert"),
+                    (vk::ShaderStageFlags::FRAGMENT, "shadow.frag"),
+                ],
+                sets: &[&scene_layout, &material_layout],
+                push_size,
+                spec: spec(),
+                vertex_input: &[0, 2],
+                color_formats: &[],
+                depth_format: Some(DEPTH_FORMAT),
+                depth_bias: Some((1.0, 1.5)),
+                cull: vk::CullModeFlags::NONE,
+            },
+        )?;
+        let lighting_pipeline = pipelines::compute(
+            ctx,
+            "deferred_lighting.comp",
+            &[&scene_layout, &lighting_layout],
+            0,
+            &spec(),
+        )?;
+
+        let pool_info = vk::CommandPoolCreateInfo::default()
+            .queue_family_index(ctx.queue_family)
+            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+        let command_pool =
+            unsafe { ctx.device.create_command_pool(&pool_info, None) }.map_err(|result| {
+                VkError::Call {
+                    call: "vkCreateCommandPool",
+                    result,
+                }
+            })?;
+        let cmd = unsafe {
+            ctx.device.allocate_command_buffers(
+                &vk::CommandBufferAllocateInfo::default()
+                    .command_pool(command_pool)
+                    .command_buffer_count(1),
+            )
+        }
+        .map_err(|result| VkError::Call {
+            call: "vkAllocateCommandBuffers",
+            result,
+        })?[0];
+        let timer = if settings.timings {
+            PassTimer::new(ctx, 32)?
+        } else {
+            None
+        };
+
+        Ok(Renderer {
+            camera: scene.camera.clone(),
+            transforms: scene.instances.iter().map(|i| i.world).collect(),
+            instances: scene
+                .instances
+                .iter()
+                .map(|i| {
+                    let p = &scene.primitives[i.primitive as usize];
+                    (p.first_index, p.index_count, p.material)
+                })
+                .collect(),
+            light_count: scene.lights.len() as u32,
+            settings,
+            frame_ubo,
+            gbuffer,
+            depth,
+            shadow_map,
+            hdr,
+            readback,
+            gbuffer_pipeline,
+            shadow_pipeline,
+            lighting_pipeline,
+            _scene_layout: scene_layout,
+            _material_layout: material_layout,
+            material_sets,
+            _lighting_layout: lighting_layout,
+            _pool: pool,
+            scene_set,
+            lighting_set,
+            _nearest: nearest,
+            _shadow_sampler: shadow_sampler,
+            gpu,
+            states,
+            timer,
+            command_pool,
+            cmd,
+            omit_barriers_of: None,
+            ctx: ctx.clone(),
+        })
+    }
+
+    fn write_uniforms(&mut self) {
+        let (w, h) = (self.settings.width, self.settings.height);
+        let view = self.camera.view();
+        let proj = Mat4::perspective_rh(
+            self.camera.yfov,
+            w as f32 / h as f32,
+            self.camera.znear,
+            self.camera.zfar,
+        );
+        let u = FrameUniforms {
+            view_proj: proj * view,
+            view,
+            proj,
+            eye: self.camera.eye().extend(1.0),
+            counts: [self.light_count, w, h, self.gpu.shadow_view_count],
+            shadow: Vec4::new(
+                self.settings.shadow_resolution as f32,
+                self.settings.normal_offset,
+                self.settings.pcf_radius as f32,
+                0.0,
+            ),
+        };
+        self.frame_ubo.write(0, as_bytes(&[u]));
+    }
+
+    fn draw_instances(
+        &self,
+        cmd: vk::CommandBuffer,
+        pipeline: &Pipeline,
+        extra: impl Fn(usize) -> u32,
+    ) {
+        let d = &self.ctx.device;
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline.raw);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                pipeline.layout,
+                0,
+                &[self.scene_set],
+                &[],
+            );
+            if self.instances.is_empty() {
+                return;
+            }
+            d.cmd_bind_vertex_buffers(cmd, 0, &[self.gpu.vertices.raw], &[0]);
+            d.cmd_bind_index_buffer(cmd, self.gpu.indices.raw, 0, vk::IndexType::UINT32);
+            let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
+            let mut bound = u32::MAX;
+            for (i, &(first, count, material)) in self.instances.iter().enumerate() {
+                if material != bound {
+                    d.cmd_bind_descriptor_sets(
+                        cmd,
+                        vk::PipelineBindPoint::GRAPHICS,
+                        pipeline.layout,
+                        1,
+                        &[self.material_sets[material as usize]],
+                        &[],
+                    );
+                    bound = material;
+                }
+                let push = DrawPush {
+                    model: self.transforms[i],
+                    material,
+                    extra: extra(i),
+                };
+                d.cmd_push_constants(cmd, pipeline.layout, stages, 0, as_bytes(&[push]));
+                d.cmd_draw_indexed(cmd, count, 1, first, 0, 0);
+            }
+        }
+    }
+
+    /// Renders one frame and waits for it. With `readback`, the radiance image is copied to
+    /// host memory for `radiance()`.
+    pub fn render(&mut self, readback: bool) -> VkResult<()> {
+        self.write_uniforms();
+        let ctx = self.ctx.clone();
+        let d = &ctx.device;
+        let cmd = self.cmd;
+        unsafe {
+            d.reset_command_buffer(cmd, vk::CommandBufferResetFlags::empty())
+                .map_err(|result| VkError::Call {
+                    call: "vkResetCommandBuffer",
+                    result,
+                })?;
+            d.begin_command_buffer(
+                cmd,
+                &vk::CommandBufferBeginInfo::default()
+                    .flags(vk::CommandBufferUsageFlags::ONE_TIME_SUBMIT),
+            )
+            .map_err(|result| VkError::Call {
+                call: "vkBeginCommandBuffer",
+                result,
+            })?;
+        }
+        let mut states = std::mem::take(&mut self.states);
+        let mut timer = self.timer.take();
+        {
+            let mut g = Graph::new(&ctx, cmd, &mut states, timer.as_mut());
+            g.omit_barriers_of = self.omit_barriers_of.clone();
+            self.record(&mut g, readback);
+        }
+        self.states = states;
+        unsafe { d.end_command_buffer(cmd) }.map_err(|result| VkError::Call {
+            call: "vkEndCommandBuffer",
+            result,
+        })?;
+        let submitted = ctx.submit_and_wait(cmd);
+        if let Some(t) = timer.as_mut() {
+            t.collect()?;
+        }
+        self.timer = timer;
+        submitted
+    }
+
+    fn record(&self, g: &mut Graph, readback: bool) {
+        let ctx = &self.ctx;
+        let d = &ctx.device;
+        let res = self.settings.shadow_resolution;
+
+        if self.gpu.shadow_view_count > 0 {
+            let mut pass = g
+                .pass("shadows")
+                .image(&self.shadow_map, Access::DepthAttachmentWrite)
+                .buffer(&self.gpu.vertices, Access::VertexBuffer)
+                .buffer(&self.gpu.indices, Access::IndexBuffer);
+            // Alpha-masked materials sample their base colour.
+            for t in &self.gpu.textures {
+                pass = pass.image(t, Access::FragmentSampled);
+            }
+            pass.record(|cmd| {
+                for view in 0..self.gpu.shadow_view_count {
+                    let depth = vk::RenderingAttachmentInfo::default()
+                        .image_view(self.shadow_map.layer_view(view))
+                        .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+                        .load_op(vk::AttachmentLoadOp::CLEAR)
+                        .store_op(vk::AttachmentStoreOp::STORE)
+                        .clear_value(vk::ClearValue {
+                            depth_stencil: vk::ClearDepthStencilValue {
+                                depth: 1.0,
+                                stencil: 0,
+                            },
+                        });
+                    let info = vk::RenderingInfo::default()
+                        .render_area(vk::Rect2D {
+                            offset: vk::Offset2D { x: 0, y: 0 },
+                            extent: vk::Extent2D {
+                                width: res,
+                                height: res,
+                            },
+                        })
+                        .layer_count(1)
+                        .depth_attachment(&depth);
+                    unsafe { d.cmd_begin_rendering(cmd, &info) };
+                    pipelines::set_viewport(ctx, cmd, res, res);
+                    self.draw_instances(cmd, &self.shadow_pipeline, |_| view);
+                    unsafe { d.cmd_end_rendering(cmd) };
+                }
+            });
+        }
+
+        let (w, h) = (self.settings.width, self.settings.height);
+        let mut pass = g
+            .pass("gbuffer")
+            .image(&self.depth, Access::DepthAttachmentWrite)
+            .buffer(&self.gpu.vertices, Access::VertexBuffer)
+            .buffer(&self.gpu.indices, Access::IndexBuffer);
+        for img in &self.gbuffer {
+            pass = pass.image(img, Access::ColorAttachmentWrite);
+        }
+        for t in &self.gpu.textures {
+            pass = pass.image(t, Access::FragmentSampled);
+        }
+        pass.record(|cmd| {
+            let colors: Vec<_> = self
+                .gbuffer
+                .iter()
+                .map(|img| {
+                    vk::RenderingAttachmentInfo::default()
+                        .image_view(img.view)
+                        .image_layout(vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL)
+                        .load_op(vk::AttachmentLoadOp::CLEAR)
+                        .store_op(vk::AttachmentStoreOp::STORE)
+                        .clear_value(vk::ClearValue {
+                            color: vk::ClearColorValue { float32: [0.0; 4] },
+                        })
+                })
+                .collect();
+            let depth = vk::RenderingAttachmentInfo::default()
+                .image_view(self.depth.view)
+                .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+                .load_op(vk::AttachmentLoadOp::CLEAR)
+                .store_op(vk::AttachmentStoreOp::DONT_CARE)
+                .clear_value(vk::ClearValue {
+                    depth_stencil: vk::ClearDepthStencilValue {
+                        depth: 1.0,
+                        stencil: 0,
+                    },
+                });
+            let info = vk::RenderingInfo::default()
+                .render_area(vk::Rect2D {
+                    offset: vk::Offset2D { x: 0, y: 0 },
+                    extent: vk::Extent2D {
+                        width: w,
+                        height: h,
+                    },
+                })
+                .layer_count(1)
+                .color_attachments(&colors)
+                .depth_attachment(&depth);
+            unsafe { d.cmd_begin_rendering(cmd, &info) };
+            pipelines::set_viewport(ctx, cmd, w, h);
+            self.draw_instances(cmd, &self.gbuffer_pipeline, |i| {
+                self.transforms[i].determinant().is_sign_negative() as u32
+            });
+            unsafe { d.cmd_end_rendering(cmd) };
+        });
+
+        let mut pass = g
+            .pass("lighting")
+            .image(&self.shadow_map, Access::ComputeSampled)
+            .image(&self.hdr, Access::ComputeStorageWrite);
+        for img in &self.gbuffer {
+            pass = pass.image(img, Access::ComputeSampled);
+        }
+        pass.record(|cmd| unsafe {
+            let p = &self.lighting_pipeline;
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, p.raw);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::COMPUTE,
+                p.layout,
+                0,
+                &[self.scene_set, self.lighting_set],
+                &[],
+            );
+            d.cmd_dispatch(cmd, w.div_ceil(8), h.div_ceil(8), 1);
+        });
+
+        if readback {
+            g.pass("readback")
+                .image(&self.hdr, Access::TransferRead)
+                .buffer(&self.readback, Access::TransferWrite)
+                .record(|cmd| unsafe {
+                    let region = vk::BufferImageCopy::default()
+                        .image_subresource(vk::ImageSubresourceLayers {
+                            aspect_mask: vk::ImageAspectFlags::COLOR,
+                            mip_level: 0,
+                            base_array_layer: 0,
+                            layer_count: 1,
+                        })
+                        .image_extent(vk::Extent3D {
+                            width: w,
+                            height: h,
+                            depth: 1,
+                        });
+                    d.cmd_copy_image_to_buffer(
+                        cmd,
+                        self.hdr.raw,
+                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                        self.readback.raw,
+                        &[region],
+                    );
+                });
+            g.pass("to host")
+                .buffer(&self.readback, Access::HostRead)
+                .untimed()
+                .record(|_| {});
+        }
+    }
+
+    /// Linear radiance, RGB per pixel, row 0 at the top (after `render(true)`).
+    pub fn radiance(&self) -> Vec<[f32; 3]> {
+        let bytes = self
+            .readback
+            .mapped()
+            .expect("readback buffer is host-visible");
+        let (w, h) = (self.settings.width as usize, self.settings.height as usize);
+        bytes[..w * h * 16]
+            .chunks_exact(16)
+            .map(|c| {
+                let f = |i: usize| f32::from_le_bytes([c[i], c[i + 1], c[i + 2], c[i + 3]]);
+                [f(0), f(4), f(8)]
+            })
+            .collect()
+    }
+
+    pub fn context(&self) -> &Arc<Context> {
+        &self.ctx
+    }
+}
+
+impl Drop for Renderer {
+    fn drop(&mut self) {
+        unsafe {
+            let _ = self.ctx.device.device_wait_idle();
+            self.ctx
+                .device
+                .destroy_command_pool(self.command_pool, None);
+        }
+    }
+}

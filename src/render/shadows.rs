@@ -1,0 +1,127 @@
+//! Light views for shadow maps: an orthographic view per directional light fitted to the scene,
+//! a perspective view per spot light covering its outer cone, six 90-degree views per point
+//! light (+X, -X, +Y, -Y, +Z, -Z, widened a little so filtering near a face edge stays inside).
+
+use super::gpu::ShadowView;
+use crate::scene::{Aabb, Light, LightKind};
+use glam::{Mat4, Vec3, Vec4};
+
+/// Views of one light and where they start in the shadow array.
+pub struct LightViews {
+    pub first: u32,
+    pub views: Vec<ShadowView>,
+}
+
+fn any_up(dir: Vec3) -> Vec3 {
+    if dir.y.abs() < 0.99 {
+        Vec3::Y
+    } else {
+        Vec3::Z
+    }
+}
+
+/// Depth range of a perspective light view: from a small fraction of the scene to its far side.
+fn near_far(eye: Vec3, bounds: &Aabb) -> (f32, f32) {
+    let radius = (bounds.extent().length() * 0.5).max(1e-3);
+    let far_corner = (0..8)
+        .map(|i| {
+            let c = Vec3::new(
+                if i & 1 == 0 {
+                    bounds.min.x
+                } else {
+                    bounds.max.x
+                },
+                if i & 2 == 0 {
+                    bounds.min.y
+                } else {
+                    bounds.max.y
+                },
+                if i & 4 == 0 {
+                    bounds.min.z
+                } else {
+                    bounds.max.z
+                },
+            );
+            (c - eye).length()
+        })
+        .fold(0.0f32, f32::max);
+    let near = (radius * 2e-3).max(1e-4);
+    (near, (far_corner * 1.01).max(near * 10.0))
+}
+
+fn perspective(eye: Vec3, dir: Vec3, fov: f32, bounds: &Aabb, resolution: u32) -> ShadowView {
+    let (near, far) = near_far(eye, bounds);
+    let view = Mat4::look_to_rh(eye, dir, any_up(dir));
+    let proj = Mat4::perspective_rh(fov, 1.0, near, far);
+    ShadowView {
+        view_proj: proj * view,
+        info: Vec4::new(1.0, 2.0 * (fov * 0.5).tan() / resolution as f32, near, far),
+    }
+}
+
+/// The views of every light, in light order. `pcf_radius` is in texels.
+pub fn light_views(
+    lights: &[Light],
+    bounds: &Aabb,
+    resolution: u32,
+    pcf_radius: u32,
+) -> Vec<LightViews> {
+    let mut next = 0u32;
+    let mut out = Vec::new();
+    let (center, radius) = if bounds.is_empty() {
+        (Vec3::ZERO, 1.0)
+    } else {
+        (bounds.center(), (bounds.extent().length() * 0.5).max(1e-3))
+    };
+    for l in lights {
+        let views = match l.kind {
+            LightKind::Directional => {
+                let d = l.direction;
+                let eye = center - d * 2.0 * radius;
+                let view = Mat4::look_to_rh(eye, d, any_up(d));
+                let proj = Mat4::orthographic_rh(
+                    -radius,
+                    radius,
+                    -radius,
+                    radius,
+                    0.5 * radius,
+                    3.5 * radius,
+                );
+                vec![ShadowView {
+                    view_proj: proj * view,
+                    info: Vec4::new(0.0, 2.0 * radius / resolution as f32, 0.0, 0.0),
+                }]
+            }
+            LightKind::Spot { outer_cone, .. } => {
+                let margin = (2 * pcf_radius + 2) as f32 / resolution as f32;
+                let half = (outer_cone.tan() * (1.0 + margin)).atan().clamp(0.01, 1.5);
+                vec![perspective(
+                    l.position,
+                    l.direction,
+                    2.0 * half,
+                    bounds,
+                    resolution,
+                )]
+            }
+            LightKind::Point => {
+                let margin = (2 * pcf_radius + 2) as f32 / resolution as f32;
+                let fov = 2.0 * (1.0 + margin).atan();
+                [
+                    Vec3::X,
+                    Vec3::NEG_X,
+                    Vec3::Y,
+                    Vec3::NEG_Y,
+                    Vec3::Z,
+                    Vec3::NEG_Z,
+                ]
+                .iter()
+                .map(|&axis| perspective(l.position, axis, fov, bounds, resolution))
+                .collect()
+            }
+        };
+        let first = next;
+        next += views.len() as u32;
+        out.push(LightViews { first, views });
+    }
+    out
+}
