@@ -32,6 +32,8 @@ pub struct MessageStats {
     pub warnings: AtomicUsize,
     /// Every counted message, as printed.
     pub log: Mutex<Vec<String>>,
+    /// The pass being recorded, named in messages the layer reports while recording.
+    pub recording: Mutex<Option<String>>,
 }
 
 impl MessageStats {
@@ -125,10 +127,12 @@ unsafe extern "system" fn debug_callback(
             }
         }
     }
-    let pass = if labels.is_empty() {
-        String::new()
-    } else {
+    let pass = if !labels.is_empty() {
         format!(" [pass {}]", labels.join(" > "))
+    } else if let Some(p) = stats.recording.lock().unwrap().as_ref() {
+        format!(" [recording pass {p}]")
+    } else {
+        String::new()
     };
     let level = if severity.contains(vk::DebugUtilsMessageSeverityFlagsEXT::ERROR) {
         stats.errors.fetch_add(1, Ordering::SeqCst);

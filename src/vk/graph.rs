@@ -359,6 +359,7 @@ impl<'r> PassBuilder<'_, '_, 'r> {
             }
         }
         let omit = g.omit_barriers_of.as_deref() == Some(self.name);
+        *g.ctx.stats.recording.lock().unwrap() = Some(self.name.to_string());
         let label = CString::new(self.name).unwrap_or_default();
         unsafe {
             if let Some(dd) = &g.ctx.debug_device {
@@ -387,6 +388,7 @@ impl<'r> PassBuilder<'_, '_, 'r> {
                 dd.cmd_end_debug_utils_label(cmd);
             }
         }
+        *g.ctx.stats.recording.lock().unwrap() = None;
         r
     }
 }

@@ -144,11 +144,21 @@ pub fn render(scene: &Scene, settings: RenderSettings) -> RadianceImage {
         "validation messages:\n{}",
         stats.messages().join("\n")
     );
-    RadianceImage {
+    let img = RadianceImage {
         width: w,
         height: h,
         pixels,
+    };
+    // VOXGI_TEST_DUMP=dir keeps each test's image for a look.
+    if let Ok(dir) = std::env::var("VOXGI_TEST_DUMP") {
+        let name = std::thread::current()
+            .name()
+            .unwrap_or("test")
+            .replace("::", "-");
+        let path = std::path::Path::new(&dir).join(format!("{name}.png"));
+        voxgi::output::save(&img, &path, 0.0).expect("dump");
     }
+    img
 }
 
 /// World position seen through pixel (x, y) on the plane y = 0, for `top_camera`.
