@@ -6,8 +6,16 @@
 use glam::{Mat4, Vec3, Vec4};
 use std::path::PathBuf;
 
+mod accessor;
+mod base64;
+pub mod builder;
+mod geometry;
 mod load;
-pub use load::load;
+mod material;
+pub use load::{default_camera, load};
+
+/// Vertical field of view of the CONVENTIONS.md default camera.
+pub const DEFAULT_YFOV_DEGREES: f32 = 40.0;
 
 /// One vertex as uploaded to the GPU (std430-compatible, 48 bytes).
 #[repr(C)]
@@ -260,6 +268,12 @@ impl Scene {
             .iter()
             .map(|i| self.primitives[i.primitive as usize].index_count as usize / 3)
             .sum()
+    }
+
+    /// Triangles stored once per primitive, however many instances draw them (the counts in
+    /// `scenes/README.md` are of this kind).
+    pub fn stored_triangle_count(&self) -> usize {
+        self.indices.len() / 3
     }
 }
 
