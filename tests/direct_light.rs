@@ -1,8 +1,8 @@
 //! Direct light is exact: radiance of a Lambertian plane under punctual lights matches the
 //! analytic answer (CONVENTIONS.md: radiometric lights, glTF BRDF).
 
-mod common;
-use common::*;
+mod gpu;
+use gpu::*;
 use glam::Vec3;
 use std::f32::consts::PI;
 use voxgi::render::RenderSettings;

@@ -1,8 +1,8 @@
 //! Shadows fall where the geometry says: fully dark inside the occluder's projection, exact
 //! outside it, and attached to a caster that stands on the floor (no peter-panning).
 
-mod common;
-use common::*;
+mod gpu;
+use gpu::*;
 use glam::Vec3;
 use std::f32::consts::PI;
 use voxgi::render::RenderSettings;

@@ -1,8 +1,8 @@
 //! The harness catches hazards: omitting a barrier on purpose must be reported by
 //! synchronization validation, and the same passes with their barriers must be silent.
 
-mod common;
-use common::*;
+mod gpu;
+use gpu::*;
 use glam::Vec3;
 use gpu_allocator::MemoryLocation;
 use voxgi::render::{RenderSettings, Renderer};

@@ -15,7 +15,7 @@ pub struct Buffers {
 
 /// Accessors with no buffer view are all zeros; this caps how many elements such an accessor
 /// may claim, so a corrupt count cannot make us allocate gigabytes of zeros.
-const MAX_VIEWLESS_ELEMENTS: u64 = 1 << 26;
+const MAX_VIEWLESS_ELEMENTS: u64 = 1 << 22;
 
 pub fn component_size(c: ComponentType) -> usize {
     match c {

@@ -271,6 +271,41 @@ impl SceneBuilder {
 
     /// The document as `.gltf` JSON text with the buffer embedded.
     pub fn to_gltf(&self) -> String {
+        self.json_and_bin(true).0
+    }
+
+    /// The document as binary glTF (.glb): JSON chunk, then the buffer as the BIN chunk.
+    pub fn to_glb(&self) -> Vec<u8> {
+        let (json, bin) = self.json_and_bin(false);
+        let mut json = json.into_bytes();
+        // Chunks are 4-byte aligned: JSON pads with spaces, BIN with zeros.
+        while json.len() % 4 != 0 {
+            json.push(b' ');
+        }
+        let mut bin = bin;
+        while bin.len() % 4 != 0 {
+            bin.push(0);
+        }
+        let bin_chunk = if bin.is_empty() { 0 } else { 8 + bin.len() };
+        let total = 12 + 8 + json.len() + bin_chunk;
+        let mut out = Vec::with_capacity(total);
+        out.extend_from_slice(b"glTF");
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&(total as u32).to_le_bytes());
+        out.extend_from_slice(&(json.len() as u32).to_le_bytes());
+        out.extend_from_slice(b"JSON");
+        out.extend_from_slice(&json);
+        if !bin.is_empty() {
+            out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+            out.extend_from_slice(b"BIN\0");
+            out.extend_from_slice(&bin);
+        }
+        out
+    }
+
+    /// JSON text and the binary buffer; `embed` puts the buffer in a data: URI (for .gltf),
+    /// otherwise the buffer has no uri (the .glb BIN chunk).
+    fn json_and_bin(&self, embed: bool) -> (String, Vec<u8>) {
         let mut bin = BinWriter::default();
         let meshes: Vec<Json> = self
             .meshes
@@ -359,17 +394,15 @@ impl SceneBuilder {
         push_nonempty(&mut root, "accessors", std::mem::take(&mut bin.accessors));
         push_nonempty(&mut root, "bufferViews", std::mem::take(&mut bin.views));
         if !bin.data.is_empty() {
-            let uri = format!(
-                "data:application/octet-stream;base64,{}",
-                base64::encode(&bin.data)
-            );
-            root.push((
-                "buffers",
-                Json::Arr(vec![obj(vec![
-                    ("byteLength", int(bin.data.len())),
-                    ("uri", Json::Str(uri)),
-                ])]),
-            ));
+            let mut buffer = vec![("byteLength", int(bin.data.len()))];
+            if embed {
+                let uri = format!(
+                    "data:application/octet-stream;base64,{}",
+                    base64::encode(&bin.data)
+                );
+                buffer.push(("uri", Json::Str(uri)));
+            }
+            root.push(("buffers", Json::Arr(vec![obj(buffer)])));
         }
         if !self.lights.is_empty() {
             let lights = self.lights.iter().map(light_json).collect();
@@ -384,7 +417,7 @@ impl SceneBuilder {
         let mut out = String::new();
         obj(root).write(&mut out, 0);
         out.push('\n');
-        out
+        (out, bin.data)
     }
 
     /// Writes the `.gltf` atomically: a temporary file in the same folder, then a rename, so
@@ -405,6 +438,7 @@ impl SceneBuilder {
             std::process::id(),
             SERIAL.fetch_add(1, Ordering::Relaxed)
         ));
+        std::fs::create_dir_all(dir)?;
         let result = (|| {
             let mut f = std::fs::File::create(&tmp)?;
             f.write_all(text.as_bytes())?;

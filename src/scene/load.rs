@@ -993,16 +993,17 @@ fn file_camera(
 /// from (c.x, c.y, max.z + d), d = 0.5 max(extent.x, extent.y) / tan(20 degrees).
 pub fn default_camera(bounds: &Aabb) -> Camera {
     let yfov = DEFAULT_YFOV_DEGREES.to_radians();
-    let finite = bounds.min.is_finite() && bounds.max.is_finite();
-    if bounds.is_empty() || !finite {
-        return Camera {
-            name: None,
-            world: Mat4::from_translation(Vec3::Z),
-            yfov,
-            znear: 0.01,
-            zfar: 100.0,
-            is_default: true,
-        };
+    // An empty scene (or one too large for f32 arithmetic) gets a camera at (0, 0, 1).
+    let fallback = Camera {
+        name: None,
+        world: Mat4::from_translation(Vec3::Z),
+        yfov,
+        znear: 0.01,
+        zfar: 100.0,
+        is_default: true,
+    };
+    if bounds.is_empty() {
+        return fallback;
     }
     let c = bounds.center();
     let e = bounds.extent();
@@ -1013,12 +1014,16 @@ pub fn default_camera(bounds: &Aabb) -> Camera {
     }
     let eye = Vec3::new(c.x, c.y, bounds.max.z + d);
     // The box's nearest face is d away and its farthest d + extent.z: keep both well inside.
+    let (znear, zfar) = (0.5 * d, 2.0 * (d + e.z));
+    if !(eye.is_finite() && znear > 0.0 && zfar.is_finite() && zfar > znear) {
+        return fallback;
+    }
     Camera {
         name: None,
         world: Mat4::from_translation(eye),
         yfov,
-        znear: 0.5 * d,
-        zfar: 2.0 * (d + e.z),
+        znear,
+        zfar,
         is_default: true,
     }
 }

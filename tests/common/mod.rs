@@ -1,176 +1,109 @@
-//! Test support: procedural scenes built directly, and rendering under validation.
+//! Helpers shared by the scene tests.
 #![allow(dead_code)]
 
-use glam::{Mat4, Vec3, Vec4};
-use std::path::PathBuf;
-use std::sync::Arc;
-use voxgi::output::RadianceImage;
-use voxgi::render::{RenderSettings, Renderer};
-use voxgi::scene::*;
-use voxgi::vk::{Context, ContextDesc};
+use std::path::{Path, PathBuf};
+use voxgi::scene::Scene;
 
-/// A validated context (Khronos layer with synchronization validation).
-pub fn context() -> Arc<Context> {
-    Context::new(&ContextDesc {
-        validate: true,
-        ..Default::default()
-    })
-    .expect("a Vulkan device with the validation layer (lavapipe in CI)")
+/// The shared real-world models (never copied into the project).
+pub fn scenes_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes")
 }
 
-pub fn empty_scene() -> Scene {
-    Scene {
-        source: PathBuf::from("procedural"),
-        vertices: vec![],
-        indices: vec![],
-        primitives: vec![],
-        instances: vec![],
-        materials: vec![],
-        textures: vec![],
-        lights: vec![],
-        camera: Camera {
-            name: None,
-            world: Mat4::IDENTITY,
-            yfov: 40f32.to_radians(),
-            znear: 0.01,
-            zfar: 100.0,
-            is_default: false,
-        },
-        bounds: Aabb::EMPTY,
-        warnings: vec![],
-    }
+/// A fresh, empty directory for one test's fixtures, under target/tmp.
+pub fn temp_dir(test: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("voxgi-scene-{test}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
 }
 
-/// A Lambertian material (metallic 0, specularFactor 0).
-pub fn lambert(scene: &mut Scene, albedo: Vec3) -> u32 {
-    scene.materials.push(Material {
-        base_color: albedo.extend(1.0),
-        metallic: 0.0,
-        roughness: 1.0,
-        specular_factor: 0.0,
-        ..Material::default()
-    });
-    scene.materials.len() as u32 - 1
-}
-
-/// Adds a quad a, b, c, d (counter-clockwise seen from its front) as one instance.
-pub fn quad(scene: &mut Scene, corners: [Vec3; 4], material: u32) {
-    let n = (corners[1] - corners[0])
-        .cross(corners[2] - corners[0])
-        .normalize();
-    let t = (corners[1] - corners[0]).normalize();
-    let base = scene.vertices.len() as u32;
-    let uvs = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
-    let mut bounds = Aabb::EMPTY;
-    for (c, uv) in corners.iter().zip(uvs) {
-        scene.vertices.push(Vertex {
-            position: c.to_array(),
-            normal: n.to_array(),
-            uv,
-            tangent: [t.x, t.y, t.z, 1.0],
-        });
-        bounds.extend(*c);
-    }
-    let first = scene.indices.len() as u32;
-    scene
-        .indices
-        .extend([base, base + 1, base + 2, base, base + 2, base + 3]);
-    scene.primitives.push(Primitive {
-        first_index: first,
-        index_count: 6,
-        material,
-        bounds,
-    });
-    scene.instances.push(Instance {
-        primitive: scene.primitives.len() as u32 - 1,
-        node: scene.instances.len(),
-        node_name: None,
-        world: Mat4::IDENTITY,
-    });
-    scene.bounds = scene.bounds.union(&bounds);
-}
-
-/// A horizontal square floor of half-size `h` at y = 0, facing +Y.
-pub fn floor(scene: &mut Scene, h: f32, material: u32) {
-    quad(
-        scene,
-        [
-            Vec3::new(-h, 0.0, h),
-            Vec3::new(h, 0.0, h),
-            Vec3::new(h, 0.0, -h),
-            Vec3::new(-h, 0.0, -h),
-        ],
-        material,
+/// Checks what every loaded scene must satisfy for the renderer to use it safely.
+pub fn assert_well_formed(s: &Scene) {
+    let name = s.source.display();
+    let nv = s.vertices.len();
+    assert!(
+        s.indices.iter().all(|&i| (i as usize) < nv),
+        "{name}: index out of range"
     );
-}
-
-/// A camera looking straight down at the origin from height `height`.
-pub fn top_camera(scene: &mut Scene, height: f32, yfov_deg: f32) {
-    scene.camera = Camera {
-        name: None,
-        world: Mat4::look_at_rh(Vec3::new(0.0, height, 0.0), Vec3::ZERO, Vec3::NEG_Z).inverse(),
-        yfov: yfov_deg.to_radians(),
-        znear: 0.01,
-        zfar: height * 4.0,
-        is_default: false,
-    };
-}
-
-pub fn light(kind: LightKind, radiance: Vec3, position: Vec3, direction: Vec3) -> Light {
-    Light {
-        name: None,
-        kind,
-        radiance,
-        range: None,
-        position,
-        direction: direction.normalize(),
+    for v in &s.vertices {
+        let all = v
+            .position
+            .iter()
+            .chain(&v.normal)
+            .chain(&v.uv)
+            .chain(&v.tangent);
+        assert!(
+            all.clone().all(|x| x.is_finite()),
+            "{name}: non-finite vertex {v:?}"
+        );
+        let n = glam::Vec3::from(v.normal);
+        assert!(
+            (n.length() - 1.0).abs() < 1e-3,
+            "{name}: normal not unit {v:?}"
+        );
+        let t = glam::Vec3::from_slice(&v.tangent[..3]);
+        assert!(
+            (t.length() - 1.0).abs() < 1e-3,
+            "{name}: tangent not unit {v:?}"
+        );
+        assert!(
+            t.dot(n).abs() < 1e-3,
+            "{name}: tangent not orthogonal {v:?}"
+        );
+        assert!(
+            v.tangent[3] == 1.0 || v.tangent[3] == -1.0,
+            "{name}: handedness {v:?}"
+        );
     }
-}
-
-/// Renders under validation; fails the test on any validation message or leak.
-pub fn render(scene: &Scene, settings: RenderSettings) -> RadianceImage {
-    let ctx = context();
-    let stats = ctx.stats.clone();
-    let (w, h) = (settings.width, settings.height);
-    let pixels = {
-        let mut r = Renderer::new(&ctx, scene, settings).expect("renderer");
-        r.render(true).expect("frame");
-        r.radiance()
-    };
-    drop(ctx);
-    assert_eq!(
-        stats.count(),
-        0,
-        "validation messages:\n{}",
-        stats.messages().join("\n")
-    );
-    let img = RadianceImage {
-        width: w,
-        height: h,
-        pixels,
-    };
-    // VOXGI_TEST_DUMP=dir keeps each test's image for a look.
-    if let Ok(dir) = std::env::var("VOXGI_TEST_DUMP") {
-        let name = std::thread::current()
-            .name()
-            .unwrap_or("test")
-            .replace("::", "-");
-        let path = std::path::Path::new(&dir).join(format!("{name}.png"));
-        voxgi::output::save(&img, &path, 0.0).expect("dump");
+    for p in &s.primitives {
+        assert_eq!(p.index_count % 3, 0);
+        assert!(p.index_count > 0);
+        assert!((p.first_index + p.index_count) as usize <= s.indices.len());
+        assert!(
+            (p.material as usize) < s.materials.len(),
+            "{name}: material index"
+        );
+        assert!(!p.bounds.is_empty());
     }
-    img
-}
-
-/// World position seen through pixel (x, y) on the plane y = 0, for `top_camera`.
-pub fn top_pixel_to_floor(x: u32, y: u32, w: u32, h: u32, height: f32, yfov_deg: f32) -> Vec3 {
-    let t = (yfov_deg.to_radians() * 0.5).tan();
-    let aspect = w as f32 / h as f32;
-    let ndc_x = (x as f32 + 0.5) / w as f32 * 2.0 - 1.0;
-    let ndc_y = 1.0 - (y as f32 + 0.5) / h as f32 * 2.0;
-    // Camera looks down -Y with up = -Z: screen right is +X, screen up is -Z.
-    Vec3::new(ndc_x * t * aspect * height, 0.0, -ndc_y * t * height)
-}
-
-pub fn v4(v: Vec3) -> Vec4 {
-    v.extend(1.0)
+    for i in &s.instances {
+        assert!((i.primitive as usize) < s.primitives.len());
+        assert!(i.world.is_finite());
+    }
+    for m in &s.materials {
+        for t in [
+            m.base_color_tex,
+            m.metallic_roughness_tex,
+            m.normal_tex,
+            m.emissive_tex,
+            m.specular_tex,
+            m.specular_color_tex,
+        ]
+        .into_iter()
+        .flatten()
+        {
+            let tex = &s.textures[t.texture as usize];
+            assert_eq!(tex.rgba8.len(), (tex.width * tex.height * 4) as usize);
+        }
+        assert!(m.base_color.is_finite() && m.emissive.is_finite());
+    }
+    // Colour textures are sRGB, data textures linear.
+    for m in &s.materials {
+        let srgb = |t: Option<voxgi::scene::TexRef>| t.map(|t| s.textures[t.texture as usize].srgb);
+        assert_ne!(srgb(m.base_color_tex), Some(false));
+        assert_ne!(srgb(m.emissive_tex), Some(false));
+        assert_ne!(srgb(m.specular_color_tex), Some(false));
+        assert_ne!(srgb(m.normal_tex), Some(true));
+        assert_ne!(srgb(m.metallic_roughness_tex), Some(true));
+        assert_ne!(srgb(m.specular_tex), Some(true));
+    }
+    for l in &s.lights {
+        assert!(l.radiance.is_finite() && l.position.is_finite());
+        assert!((l.direction.length() - 1.0).abs() < 1e-4);
+    }
+    let c = &s.camera;
+    assert!(c.world.is_finite() && c.yfov > 0.0 && c.znear > 0.0 && c.zfar > c.znear);
+    if !s.instances.is_empty() {
+        assert!(!s.bounds.is_empty());
+    }
 }

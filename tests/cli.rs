@@ -1,0 +1,84 @@
+//! The command line: renders the bundled scene, and bad input gives a clear error that names
+//! the file, a non-zero exit, no panic and no output file.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn voxgi(args: &[&str]) -> (bool, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_voxgi"))
+        .args(args)
+        .output()
+        .expect("run voxgi");
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!stderr.contains("panicked"), "voxgi panicked:\n{stderr}");
+    (out.status.success(), stderr)
+}
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("voxgi-cli-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn renders_the_bundled_scene_to_exr_and_png() {
+    let dir = temp_dir("ok");
+    let exr = dir.join("box.exr");
+    let png = dir.join("box.png");
+    for out in [&exr, &png] {
+        let (ok, err) = voxgi(&[
+            "render",
+            "--out",
+            out.to_str().unwrap(),
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--validate",
+        ]);
+        assert!(ok, "render failed:\n{err}");
+    }
+    let img = voxgi::output::load_exr(&exr).unwrap();
+    assert_eq!((img.width, img.height), (64, 48));
+    assert!(!img.has_non_finite());
+    assert!(img.pixels.iter().any(|p| p[0] > 0.0), "the bundled scene rendered black");
+    let png = image::open(&png).unwrap();
+    assert_eq!((png.width(), png.height()), (64, 48));
+}
+
+#[test]
+fn bad_input_is_a_clear_error_with_no_output() {
+    let dir = temp_dir("bad");
+    let truncated = dir.join("truncated.gltf");
+    std::fs::write(&truncated, r#"{"asset": {"version": "2.0"}, "meshes": [{"#).unwrap();
+    let missing = dir.join("missing.gltf");
+    let out = dir.join("never.png");
+    let o = out.to_str().unwrap();
+    for (args, needle) in [
+        (
+            vec!["render", truncated.to_str().unwrap(), "--out", o],
+            "truncated.gltf",
+        ),
+        (
+            vec!["render", missing.to_str().unwrap(), "--out", o],
+            "missing.gltf",
+        ),
+        (vec!["info", missing.to_str().unwrap()], "missing.gltf"),
+        (vec!["render", "--out", "image.tiff"], "image.tiff"),
+        (vec!["render", "--width", "abc", "--out", o], "--width"),
+        (vec!["render", "--mode", "sideways", "--out", o], "sideways"),
+        (vec!["render", "--bogus"], "--bogus"),
+    ] {
+        let (ok, err) = voxgi(&args);
+        assert!(!ok, "{args:?} succeeded");
+        assert!(err.contains(needle), "{args:?}: the error does not name {needle}:\n{err}");
+        assert!(err.contains("error"), "{args:?}: no error line:\n{err}");
+    }
+    assert!(!out.exists(), "a failed run left {}", out.display());
+    let leftovers: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().contains(".tmp-"))
+        .collect();
+    assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
+}
