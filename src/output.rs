@@ -50,9 +50,9 @@ pub fn display(img: &RadianceImage, exposure: f32) -> image::RgbImage {
     let scale = 2f32.powf(exposure);
     let mut out = image::RgbImage::new(img.width, img.height);
     for (p, px) in out.pixels_mut().zip(&img.pixels) {
-        for c in 0..3 {
-            let v = if px[c].is_finite() { px[c] } else { 0.0 };
-            p.0[c] = (srgb_encode(tone(v * scale)) * 255.0 + 0.5) as u8;
+        for (out, &v) in p.0.iter_mut().zip(px) {
+            let v = if v.is_finite() { v } else { 0.0 };
+            *out = (srgb_encode(tone(v * scale)) * 255.0 + 0.5) as u8;
         }
     }
     out

@@ -41,7 +41,10 @@ fn renders_the_bundled_scene_to_exr_and_png() {
     let img = voxgi::output::load_exr(&exr).unwrap();
     assert_eq!((img.width, img.height), (64, 48));
     assert!(!img.has_non_finite());
-    assert!(img.pixels.iter().any(|p| p[0] > 0.0), "the bundled scene rendered black");
+    assert!(
+        img.pixels.iter().any(|p| p[0] > 0.0),
+        "the bundled scene rendered black"
+    );
     let png = image::open(&png).unwrap();
     assert_eq!((png.width(), png.height()), (64, 48));
 }
@@ -71,7 +74,10 @@ fn bad_input_is_a_clear_error_with_no_output() {
     ] {
         let (ok, err) = voxgi(&args);
         assert!(!ok, "{args:?} succeeded");
-        assert!(err.contains(needle), "{args:?}: the error does not name {needle}:\n{err}");
+        assert!(
+            err.contains(needle),
+            "{args:?}: the error does not name {needle}:\n{err}"
+        );
         assert!(err.contains("error"), "{args:?}: no error line:\n{err}");
     }
     assert!(!out.exists(), "a failed run left {}", out.display());

@@ -2,8 +2,8 @@
 //! analytic answer (CONVENTIONS.md: radiometric lights, glTF BRDF).
 
 mod gpu;
-use gpu::*;
 use glam::Vec3;
+use gpu::*;
 use std::f32::consts::PI;
 use voxgi::render::RenderSettings;
 use voxgi::scene::LightKind;

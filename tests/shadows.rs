@@ -2,8 +2,8 @@
 //! outside it, and attached to a caster that stands on the floor (no peter-panning).
 
 mod gpu;
-use gpu::*;
 use glam::Vec3;
+use gpu::*;
 use std::f32::consts::PI;
 use voxgi::render::RenderSettings;
 use voxgi::scene::LightKind;

@@ -2,8 +2,8 @@
 //! synchronization validation, and the same passes with their barriers must be silent.
 
 mod gpu;
-use gpu::*;
 use glam::Vec3;
+use gpu::*;
 use gpu_allocator::MemoryLocation;
 use voxgi::render::{RenderSettings, Renderer};
 use voxgi::scene::LightKind;

@@ -117,7 +117,7 @@ impl GpuScene {
         let mut staging_data: Vec<u8> = Vec::new();
         let mut stage = |bytes: &[u8]| -> u64 {
             // 16-byte alignment satisfies every copy's offset rules.
-            while staging_data.len() % 16 != 0 {
+            while !staging_data.len().is_multiple_of(16) {
                 staging_data.push(0);
             }
             let off = staging_data.len() as u64;

@@ -172,7 +172,7 @@ pub fn derive(state: &mut State, access: Access, is_image: bool) -> Option<Barri
         .unwrap_or((vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE));
     let transition = is_image && state.layout != new_layout;
 
-    let barrier = if transition {
+    if transition {
         // A layout transition is a write: it waits for the last write and every reader since.
         let b = Barrier {
             src_stage: write_stage | state.read_stages,
@@ -231,8 +231,7 @@ pub fn derive(state: &mut State, access: Access, is_image: bool) -> Option<Barri
         state.read_stages |= next.stage;
         state.read_access |= next.access;
         b
-    };
-    barrier
+    }
 }
 
 /// Tracked state of every resource, kept across command buffers (one queue, submitted in order).
@@ -368,7 +367,8 @@ impl<'r> PassBuilder<'_, '_, 'r> {
                     &vk::DebugUtilsLabelEXT::default().label_name(&label),
                 );
             }
-            if !omit && !(image_barriers.is_empty() && buffer_barriers.is_empty()) {
+            let any = !(image_barriers.is_empty() && buffer_barriers.is_empty());
+            if any && !omit {
                 let dep = vk::DependencyInfo::default()
                     .image_memory_barriers(&image_barriers)
                     .buffer_memory_barriers(&buffer_barriers);
