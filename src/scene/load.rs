@@ -52,9 +52,7 @@ fn load_inner(path: &Path) -> Result<Scene, String> {
     })?;
     let mut warnings = Vec::new();
     let (json_bytes, bin) = split_container(path, &bytes, &mut warnings)?;
-    let gltf =
-        gltf::Gltf::from_slice_without_validation(json_bytes).map_err(describe_json_error)?;
-    let root = gltf.document.into_json();
+    let root = parse_json(json_bytes, &mut warnings)?;
 
     let version = root.asset.version.trim();
     if !(version == "2" || version.starts_with("2.")) {
@@ -237,6 +235,47 @@ fn split_container<'a>(
     }
     let json = json.ok_or("truncated .glb: there is no JSON chunk")?;
     Ok((json, bin))
+}
+
+/// Parses the glTF JSON without validation. gltf-json is stricter than the glTF spec in a few
+/// places (a scene without `nodes`, an animation channel without a target node); such files
+/// are retried once with those parts repaired.
+fn parse_json(bytes: &[u8], warnings: &mut Vec<String>) -> Result<json::Root, String> {
+    let first = match gltf::Gltf::from_slice_without_validation(bytes) {
+        Ok(g) => return Ok(g.document.into_json()),
+        Err(e) => e,
+    };
+    let mut repairs = Vec::new();
+    if let Some(fixed) = repair_json(bytes, &mut repairs) {
+        if let Ok(g) = gltf::Gltf::from_slice_without_validation(&fixed) {
+            warnings.extend(repairs);
+            return Ok(g.document.into_json());
+        }
+    }
+    Err(describe_json_error(first))
+}
+
+fn repair_json(bytes: &[u8], repairs: &mut Vec<String>) -> Option<Vec<u8>> {
+    let mut v: json::Value = json::deserialize::from_slice(bytes).ok()?;
+    let root = v.as_object_mut()?;
+    if let Some(scenes) = root.get_mut("scenes").and_then(|s| s.as_array_mut()) {
+        for (i, scene) in scenes.iter_mut().enumerate() {
+            if let Some(scene) = scene.as_object_mut() {
+                if !scene.contains_key("nodes") {
+                    scene.insert("nodes".to_string(), json::Value::Array(Vec::new()));
+                    repairs.push(format!("scene {i} has no nodes; it is empty"));
+                }
+            }
+        }
+    }
+    // The renderer does not animate; dropping animations loses nothing.
+    if root.remove("animations").is_some() {
+        repairs.push("animations could not be parsed; they are ignored".into());
+    }
+    if repairs.is_empty() {
+        return None;
+    }
+    json::serialize::to_vec(&v).ok()
 }
 
 fn describe_json_error(e: gltf::Error) -> String {
