@@ -451,7 +451,7 @@ struct Loader<'a> {
     instances: Vec<Instance>,
     lights: Vec<Light>,
     /// glTF mesh index -> the scene primitives made from it (a mesh is stored once).
-    mesh_cache: HashMap<usize, Vec<(u32, String)>>,
+    mesh_cache: HashMap<usize, Vec<u32>>,
     default_material_used: bool,
     /// First camera met: (camera index, node world matrix).
     camera_node: Option<(usize, Mat4)>,
@@ -616,9 +616,9 @@ impl Loader<'_> {
             let prims = self.build_mesh(mesh)?;
             self.mesh_cache.insert(mesh, prims);
         }
-        for (p, _) in &self.mesh_cache[&mesh] {
+        for &p in &self.mesh_cache[&mesh] {
             self.instances.push(Instance {
-                primitive: *p,
+                primitive: p,
                 node: node_index,
                 node_name: node.name.clone(),
                 world,
@@ -628,7 +628,7 @@ impl Loader<'_> {
     }
 
     /// Converts every drawable primitive of a mesh, appending to the shared arrays.
-    fn build_mesh(&mut self, m: usize) -> Result<Vec<(u32, String)>, String> {
+    fn build_mesh(&mut self, m: usize) -> Result<Vec<u32>, String> {
         let root = self.root;
         let mesh = &root.meshes[m];
         let mlabel = mesh_label(m, mesh);
@@ -688,7 +688,7 @@ impl Loader<'_> {
             self.indices
                 .extend(built.indices.iter().map(|&i| i + base as u32));
             self.vertices.extend(built.vertices);
-            out.push((self.primitives.len() as u32, label));
+            out.push(self.primitives.len() as u32);
             self.primitives.push(Primitive {
                 first_index,
                 index_count: built.indices.len() as u32,
