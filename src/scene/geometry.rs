@@ -272,7 +272,7 @@ mod tests {
     #[test]
     fn strips_and_fans_keep_winding() {
         let (s, _) = assemble(Topology::Strip, &[0, 1, 2, 3]);
-        assert_eq!(s, vec![[0, 1, 2], [2, 1, 3]]);
+        assert_eq!(s, vec![[0, 1, 2], [1, 3, 2]]);
         let (f, _) = assemble(Topology::Fan, &[0, 1, 2, 3]);
         assert_eq!(f, vec![[1, 2, 0], [2, 3, 0]]);
         let (t, rest) = assemble(Topology::Triangles, &[0, 1, 2, 3]);

@@ -52,9 +52,7 @@ fn load_inner(path: &Path) -> Result<Scene, String> {
     })?;
     let mut warnings = Vec::new();
     let (json_bytes, bin) = split_container(path, &bytes, &mut warnings)?;
-    let gltf =
-        gltf::Gltf::from_slice_without_validation(json_bytes).map_err(describe_json_error)?;
-    let root = gltf.document.into_json();
+    let root = parse_json(json_bytes, &mut warnings)?;
 
     let version = root.asset.version.trim();
     if !(version == "2" || version.starts_with("2.")) {
@@ -239,6 +237,47 @@ fn split_container<'a>(
     Ok((json, bin))
 }
 
+/// Parses the glTF JSON without validation. gltf-json is stricter than the glTF spec in a few
+/// places (a scene without `nodes`, an animation channel without a target node); such files
+/// are retried once with those parts repaired.
+fn parse_json(bytes: &[u8], warnings: &mut Vec<String>) -> Result<json::Root, String> {
+    let first = match gltf::Gltf::from_slice_without_validation(bytes) {
+        Ok(g) => return Ok(g.document.into_json()),
+        Err(e) => e,
+    };
+    let mut repairs = Vec::new();
+    if let Some(fixed) = repair_json(bytes, &mut repairs) {
+        if let Ok(g) = gltf::Gltf::from_slice_without_validation(&fixed) {
+            warnings.extend(repairs);
+            return Ok(g.document.into_json());
+        }
+    }
+    Err(describe_json_error(first))
+}
+
+fn repair_json(bytes: &[u8], repairs: &mut Vec<String>) -> Option<Vec<u8>> {
+    let mut v: json::Value = json::deserialize::from_slice(bytes).ok()?;
+    let root = v.as_object_mut()?;
+    if let Some(scenes) = root.get_mut("scenes").and_then(|s| s.as_array_mut()) {
+        for (i, scene) in scenes.iter_mut().enumerate() {
+            if let Some(scene) = scene.as_object_mut() {
+                if !scene.contains_key("nodes") {
+                    scene.insert("nodes".to_string(), json::Value::Array(Vec::new()));
+                    repairs.push(format!("scene {i} has no nodes; it is empty"));
+                }
+            }
+        }
+    }
+    // The renderer does not animate; dropping animations loses nothing.
+    if root.remove("animations").is_some() {
+        repairs.push("animations could not be parsed; they are ignored".into());
+    }
+    if repairs.is_empty() {
+        return None;
+    }
+    json::serialize::to_vec(&v).ok()
+}
+
 fn describe_json_error(e: gltf::Error) -> String {
     match e {
         gltf::Error::Deserialize(je) if je.is_eof() => format!(
@@ -412,7 +451,7 @@ struct Loader<'a> {
     instances: Vec<Instance>,
     lights: Vec<Light>,
     /// glTF mesh index -> the scene primitives made from it (a mesh is stored once).
-    mesh_cache: HashMap<usize, Vec<(u32, String)>>,
+    mesh_cache: HashMap<usize, Vec<u32>>,
     default_material_used: bool,
     /// First camera met: (camera index, node world matrix).
     camera_node: Option<(usize, Mat4)>,
@@ -577,9 +616,9 @@ impl Loader<'_> {
             let prims = self.build_mesh(mesh)?;
             self.mesh_cache.insert(mesh, prims);
         }
-        for (p, _) in &self.mesh_cache[&mesh] {
+        for &p in &self.mesh_cache[&mesh] {
             self.instances.push(Instance {
-                primitive: *p,
+                primitive: p,
                 node: node_index,
                 node_name: node.name.clone(),
                 world,
@@ -589,7 +628,7 @@ impl Loader<'_> {
     }
 
     /// Converts every drawable primitive of a mesh, appending to the shared arrays.
-    fn build_mesh(&mut self, m: usize) -> Result<Vec<(u32, String)>, String> {
+    fn build_mesh(&mut self, m: usize) -> Result<Vec<u32>, String> {
         let root = self.root;
         let mesh = &root.meshes[m];
         let mlabel = mesh_label(m, mesh);
@@ -649,7 +688,7 @@ impl Loader<'_> {
             self.indices
                 .extend(built.indices.iter().map(|&i| i + base as u32));
             self.vertices.extend(built.vertices);
-            out.push((self.primitives.len() as u32, label));
+            out.push(self.primitives.len() as u32);
             self.primitives.push(Primitive {
                 first_index,
                 index_count: built.indices.len() as u32,

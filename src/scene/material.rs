@@ -223,7 +223,13 @@ pub fn load_materials(
     };
     for (t, tex) in root.textures.iter().enumerate() {
         let image = tex.source.value();
-        if image >= root.images.len() {
+        // gltf-json marks a texture without `source` with u32::MAX.
+        if image == u32::MAX as usize {
+            warnings.push(format!(
+                "texture {t} has no source image (only an extension source such as KTX2 or \
+                 WebP, which is not supported); materials using it get no texture"
+            ));
+        } else if image >= root.images.len() {
             warnings.push(format!(
                 "texture {t} uses image {image}, which does not exist (the file has {} images); \
                  materials using it get no texture",
