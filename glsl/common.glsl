@@ -16,7 +16,18 @@ layout(set = 0, binding = 0, std140) uniform Frame {
     vec4 eye;         // xyz camera position
     uvec4 counts;     // x lights, y width, z height, w shadow views
     vec4 shadow;      // x shadow-map resolution, y normal-offset in texels, z PCF radius in texels
+    vec4 grid;        // voxel grid: xyz origin (min corner), w edge length (metres)
+    uvec4 grid_info;  // x resolution N, y bounces, z diffuse cone count, w flags (FLAG_*)
+    vec4 cone;        // x diffuse aperture (tan of half angle), y step factor, z max distance
+                      // (fraction of the grid), w emission fixed-point scale
+    vec4 trace;       // x start offset (voxels), y AO falloff, z specular (0: off), w debug mip
+    vec4 cones[16];   // diffuse cones: xyz direction in the normal's frame (z = normal), w weight
 } frame;
+
+const uint FLAG_DYNAMIC = 1u;        // dynamic accumulators are bound and filled
+const uint FLAG_EMISSIVE = 2u;       // emission accumulators exist
+const uint FLAG_VOXEL_SHADOWS = 4u;  // visibility by tracing the voxels instead of shadow maps
+const uint FLAG_TWO_SIDED = 8u;      // treat cancelled normals as two-sided voxels
 
 struct Material {
     vec4 base_color;

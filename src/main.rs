@@ -3,6 +3,7 @@
 use anyhow::{bail, Context as _, Result};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use voxgi::gi::GiSettings;
 use voxgi::output::{self, RadianceImage};
 use voxgi::render::{Mode, RenderSettings, Renderer};
 use voxgi::scene::{self, Scene};
@@ -20,7 +21,16 @@ USAGE:
   SCENE        a glTF 2.0 file (.gltf or .glb); render defaults to the bundled Cornell box
   --out FILE   .exr: linear radiance (RGB float); .png: display image (default voxgi.png)
   --width W, --height H   image size in pixels (default 512 x 512)
-  --mode MODE  direct: punctual lights with shadows, plus emission
+  --mode MODE  full (default): direct + cone-traced indirect light; direct: punctual lights
+               with shadows, plus emission; indirect; ao; voxels-albedo, voxels-normal,
+               voxels-emission, voxels-radiance: the first voxel along each ray
+  --mip L      with voxels-radiance: the directional volumes at mip level L
+  --voxels N   voxels per side of the grid (default 128)
+  --bounces B  1: direct light in the voxels; 2 (default): plus a second bounce
+  --paper      the original's behaviour and constants (RGBA8 averages and volumes, 6 cones)
+  --cones N, --aperture DEG, --step F   diffuse cones per pixel (6), their aperture (60),
+               step as a fraction of the cone diameter (0.5)
+  --voxel-shadows         voxel visibility by tracing the voxels (else the shadow maps)
   --frames N   frames to render (timings are medians over them; default 1, 5 with --timings)
   --exposure EV           display exposure for .png, in stops (default 0)
   --shadow-res N          shadow-map texels per side (default 2048)
@@ -42,7 +52,13 @@ struct Args {
     options: Vec<(String, Option<String>)>,
 }
 
-const FLAGS: &[&str] = &["--validate", "--timings", "--help"];
+const FLAGS: &[&str] = &[
+    "--validate",
+    "--timings",
+    "--help",
+    "--paper",
+    "--voxel-shadows",
+];
 const VALUED: &[&str] = &[
     "--out",
     "--width",
@@ -53,6 +69,12 @@ const VALUED: &[&str] = &[
     "--shadow-res",
     "--device",
     "--sun",
+    "--mip",
+    "--voxels",
+    "--bounces",
+    "--cones",
+    "--aperture",
+    "--step",
 ];
 
 impl Args {
@@ -148,6 +170,40 @@ fn parse_sun(spec: &str) -> Result<scene::Light> {
     })
 }
 
+/// The voxel passes' settings from the command line.
+fn gi_settings(args: &Args) -> Result<GiSettings> {
+    let voxels: u32 = args.number("--voxels", 128)?;
+    if !(4..=1024).contains(&voxels) {
+        bail!("--voxels {voxels} is out of range (4 to 1024)");
+    }
+    let mut gi = if args.flag("--paper") {
+        GiSettings::paper(voxels)
+    } else {
+        GiSettings {
+            voxels,
+            ..Default::default()
+        }
+    };
+    gi.bounces = args.number("--bounces", gi.bounces)?;
+    if !(1..=2).contains(&gi.bounces) {
+        bail!("--bounces must be 1 or 2");
+    }
+    gi.cone_count = args.number("--cones", gi.cone_count)?;
+    if !(1..=16).contains(&gi.cone_count) {
+        bail!("--cones must be 1 to 16");
+    }
+    gi.cone_aperture_deg = args.number("--aperture", gi.cone_aperture_deg)?;
+    if !(gi.cone_aperture_deg > 0.5 && gi.cone_aperture_deg < 179.0) {
+        bail!("--aperture must be between 0.5 and 179 degrees");
+    }
+    gi.step_factor = args.number("--step", gi.step_factor)?;
+    if !(gi.step_factor >= 0.05 && gi.step_factor <= 4.0) {
+        bail!("--step must be between 0.05 and 4");
+    }
+    gi.voxel_shadows = args.flag("--voxel-shadows");
+    Ok(gi)
+}
+
 fn render(args: &Args) -> Result<()> {
     let scene_path = match args.positional.as_slice() {
         [] => default_scene(),
@@ -169,7 +225,7 @@ fn render(args: &Args) -> Result<()> {
     }
     let mode: Mode = args
         .value("--mode")
-        .unwrap_or("direct")
+        .unwrap_or("full")
         .parse()
         .map_err(anyhow::Error::msg)?;
     let timings = args.flag("--timings");
@@ -200,6 +256,11 @@ fn render(args: &Args) -> Result<()> {
         mode,
         shadow_resolution,
         timings,
+        gi: gi_settings(args)?,
+        mip: args
+            .value("--mip")
+            .map(|_| args.number("--mip", 0u32))
+            .transpose()?,
         ..Default::default()
     };
     let image = {

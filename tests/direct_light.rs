@@ -5,7 +5,7 @@ mod gpu;
 use glam::Vec3;
 use gpu::*;
 use std::f32::consts::PI;
-use voxgi::render::RenderSettings;
+use voxgi::render::{Mode, RenderSettings};
 use voxgi::scene::LightKind;
 
 const W: u32 = 96;
@@ -17,6 +17,7 @@ fn settings() -> RenderSettings {
         width: W,
         height: W,
         shadow_resolution: 1024,
+        mode: Mode::Direct,
         ..Default::default()
     }
 }

@@ -4,7 +4,7 @@
 mod gpu;
 use glam::{Mat4, Vec3};
 use gpu::*;
-use voxgi::render::RenderSettings;
+use voxgi::render::{Mode, RenderSettings};
 use voxgi::scene::{AlphaMode, LightKind, Material, Scene};
 
 const W: u32 = 32;
@@ -14,6 +14,7 @@ fn settings() -> RenderSettings {
         width: W,
         height: W,
         shadow_resolution: 256,
+        mode: Mode::Direct,
         ..Default::default()
     }
 }

@@ -4,7 +4,7 @@
 mod gpu;
 use glam::Vec3;
 use std::path::{Path, PathBuf};
-use voxgi::render::RenderSettings;
+use voxgi::render::{Mode, RenderSettings};
 use voxgi::scene::{self, Light, LightKind};
 
 fn shared_scenes() -> Vec<PathBuf> {
@@ -47,6 +47,7 @@ fn render_scene(path: &Path) {
             width: 96,
             height: 96,
             shadow_resolution: 512,
+            mode: Mode::Direct,
             ..Default::default()
         },
     );

@@ -5,7 +5,7 @@ mod gpu;
 use glam::Vec3;
 use gpu::*;
 use std::f32::consts::PI;
-use voxgi::render::RenderSettings;
+use voxgi::render::{Mode, RenderSettings};
 use voxgi::scene::LightKind;
 
 const W: u32 = 128;
@@ -117,6 +117,7 @@ fn occluder_casts_a_shadow_where_the_geometry_says() {
             width: W,
             height: W,
             shadow_resolution: 1024,
+            mode: Mode::Direct,
             ..Default::default()
         },
     );
@@ -170,6 +171,7 @@ fn shadow_stays_attached_to_its_caster() {
             width: W,
             height: W,
             shadow_resolution: 1024,
+            mode: Mode::Direct,
             ..Default::default()
         },
     );

@@ -5,7 +5,7 @@ mod gpu;
 use glam::Vec3;
 use gpu::*;
 use gpu_allocator::MemoryLocation;
-use voxgi::render::{RenderSettings, Renderer};
+use voxgi::render::{Mode, RenderSettings, Renderer};
 use voxgi::scene::LightKind;
 use voxgi::vk::{vk, Access, Buffer, Graph, ResourceStates};
 
@@ -73,6 +73,7 @@ fn renderer_pass_without_its_barriers_is_reported() {
             width: 32,
             height: 32,
             shadow_resolution: 64,
+            mode: Mode::Direct,
             ..Default::default()
         };
         let mut r = Renderer::new(&ctx, &s, settings).unwrap();

@@ -20,6 +20,17 @@ pub struct FrameUniforms {
     pub counts: [u32; 4],
     /// shadow-map resolution, normal offset in texels, PCF radius in texels, unused
     pub shadow: Vec4,
+    /// voxel grid origin, edge length
+    pub grid: Vec4,
+    /// resolution, bounces, diffuse cone count, flags
+    pub grid_info: [u32; 4],
+    /// diffuse aperture (tan of half angle), step factor, max distance (fraction of the grid),
+    /// emission fixed-point scale
+    pub cone: Vec4,
+    /// start offset (voxels), AO falloff (per metre), specular on, debug mip
+    pub trace: Vec4,
+    /// diffuse cones: direction around +Z, weight
+    pub cones: [Vec4; 16],
 }
 
 #[repr(C)]

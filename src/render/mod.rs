@@ -2,9 +2,9 @@
 
 pub mod gpu;
 mod gpu_scene;
-mod pipelines;
+pub(crate) mod pipelines;
 mod renderer;
 pub mod shadows;
 
 pub use gpu_scene::{mip_chain, GpuScene};
-pub use renderer::{Mode, RenderSettings, Renderer};
+pub use renderer::{Mode, RenderSettings, Renderer, DRAW_PUSH_SIZE};

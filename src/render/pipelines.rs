@@ -122,6 +122,85 @@ impl DescriptorPool {
     }
 }
 
+/// One descriptor of a set, for `DescriptorPool::set`.
+pub enum Desc<'a> {
+    Uniform(&'a crate::vk::Buffer),
+    Storage(&'a crate::vk::Buffer),
+    /// A combined image sampler in SHADER_READ_ONLY_OPTIMAL.
+    Sampled(vk::ImageView, vk::Sampler),
+    /// A storage image in GENERAL.
+    StorageImage(vk::ImageView),
+}
+
+/// A descriptor set with the layout made for it.
+pub struct Set {
+    pub layout: SetLayout,
+    pub raw: vk::DescriptorSet,
+}
+
+impl DescriptorPool {
+    /// Makes a layout from the descriptors' kinds, allocates a set and writes it.
+    pub fn set(&self, stages: vk::ShaderStageFlags, descs: &[(u32, Desc)]) -> VkResult<Set> {
+        let bindings: Vec<_> = descs
+            .iter()
+            .map(|(b, d)| {
+                let ty = match d {
+                    Desc::Uniform(_) => vk::DescriptorType::UNIFORM_BUFFER,
+                    Desc::Storage(_) => vk::DescriptorType::STORAGE_BUFFER,
+                    Desc::Sampled(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                    Desc::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
+                };
+                (*b, ty, 1, stages)
+            })
+            .collect();
+        let layout = SetLayout::new(&self.ctx, &bindings)?;
+        let raw = self.allocate(&layout)?;
+        let buffers: Vec<[vk::DescriptorBufferInfo; 1]> = descs
+            .iter()
+            .map(|(_, d)| match d {
+                Desc::Uniform(b) | Desc::Storage(b) => [vk::DescriptorBufferInfo {
+                    buffer: b.raw,
+                    offset: 0,
+                    range: vk::WHOLE_SIZE,
+                }],
+                _ => [vk::DescriptorBufferInfo::default()],
+            })
+            .collect();
+        let images: Vec<[vk::DescriptorImageInfo; 1]> = descs
+            .iter()
+            .map(|(_, d)| match d {
+                Desc::Sampled(view, sampler) => [vk::DescriptorImageInfo {
+                    sampler: *sampler,
+                    image_view: *view,
+                    image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                }],
+                Desc::StorageImage(view) => [vk::DescriptorImageInfo {
+                    sampler: vk::Sampler::null(),
+                    image_view: *view,
+                    image_layout: vk::ImageLayout::GENERAL,
+                }],
+                _ => [vk::DescriptorImageInfo::default()],
+            })
+            .collect();
+        let writes: Vec<_> = descs
+            .iter()
+            .enumerate()
+            .map(|(i, (b, d))| {
+                let w = vk::WriteDescriptorSet::default()
+                    .dst_set(raw)
+                    .dst_binding(*b)
+                    .descriptor_type(bindings[i].1);
+                match d {
+                    Desc::Uniform(_) | Desc::Storage(_) => w.buffer_info(&buffers[i]),
+                    _ => w.image_info(&images[i]),
+                }
+            })
+            .collect();
+        unsafe { self.ctx.device.update_descriptor_sets(&writes, &[]) };
+        Ok(Set { layout, raw })
+    }
+}
+
 impl Drop for DescriptorPool {
     fn drop(&mut self) {
         unsafe { self.ctx.device.destroy_descriptor_pool(self.raw, None) };
@@ -132,6 +211,8 @@ pub struct Pipeline {
     ctx: Arc<Context>,
     pub raw: vk::Pipeline,
     pub layout: vk::PipelineLayout,
+    /// The stages its push-constant range is visible to.
+    pub push_stages: vk::ShaderStageFlags,
 }
 
 impl Drop for Pipeline {
@@ -215,6 +296,7 @@ pub fn compute(
                 ctx: ctx.clone(),
                 raw: p[0],
                 layout,
+                push_stages: vk::ShaderStageFlags::COMPUTE,
             })
         }
         Err((_, result)) => {
@@ -365,6 +447,7 @@ pub fn graphics(ctx: &Arc<Context>, desc: &GraphicsDesc) -> VkResult<Pipeline> {
                 ctx: ctx.clone(),
                 raw: p[0],
                 layout,
+                push_stages,
             })
         }
         Err((_, result)) => {

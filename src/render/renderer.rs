@@ -1,6 +1,7 @@
 use super::gpu::{as_bytes, FrameUniforms};
 use super::gpu_scene::GpuScene;
 use super::pipelines::{self, DescriptorPool, GraphicsDesc, Pipeline, SetLayout, Spec};
+use crate::gi::{Gi, GiInputs, GiSettings, TraceMode};
 use crate::scene::{Camera, Material, Scene, TexRef};
 use crate::vk::{
     vk, Access, Buffer, Context, Graph, Image, ImageDesc, PassTimer, ResourceStates, Sampler,
@@ -13,19 +14,62 @@ use std::sync::Arc;
 /// What the image shows.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Mode {
+    /// Direct and indirect light (cone traced), plus emission.
+    Full,
     /// Punctual lights with shadows, plus emission.
     Direct,
+    /// Only the cone-traced indirect light.
+    Indirect,
+    /// Ambient occlusion from the voxels (grey).
+    Ao,
+    /// The first voxel along each camera ray: its albedo, normal, emission or radiance
+    /// (radiance with `mip`: the directional volumes at that level).
+    VoxelsAlbedo,
+    VoxelsNormal,
+    VoxelsEmission,
+    VoxelsRadiance,
+}
+
+impl Mode {
+    pub const NAMES: &'static str =
+        "full, direct, indirect, ao, voxels-albedo, voxels-normal, voxels-emission, voxels-radiance";
+
+    /// Whether the voxel passes run at all.
+    pub fn uses_voxels(self) -> bool {
+        self != Mode::Direct
+    }
+    /// Whether the voxels are lit (inject and mips).
+    pub fn lights_voxels(self) -> bool {
+        matches!(
+            self,
+            Mode::Full | Mode::Indirect | Mode::Ao | Mode::VoxelsRadiance
+        )
+    }
+    /// Whether the image comes from the G-buffer (else from walking the voxels).
+    pub fn shades_pixels(self) -> bool {
+        matches!(self, Mode::Full | Mode::Direct | Mode::Indirect | Mode::Ao)
+    }
 }
 
 impl std::str::FromStr for Mode {
     type Err = String;
     fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "direct" => Ok(Mode::Direct),
-            other => Err(format!(
-                "unknown render mode {other:?} (the modes are: direct)"
-            )),
-        }
+        Ok(match s {
+            "full" => Mode::Full,
+            "direct" => Mode::Direct,
+            "indirect" => Mode::Indirect,
+            "ao" => Mode::Ao,
+            "voxels-albedo" => Mode::VoxelsAlbedo,
+            "voxels-normal" => Mode::VoxelsNormal,
+            "voxels-emission" => Mode::VoxelsEmission,
+            "voxels-radiance" => Mode::VoxelsRadiance,
+            other => {
+                return Err(format!(
+                    "unknown render mode {other:?} (the modes are: {})",
+                    Mode::NAMES
+                ))
+            }
+        })
     }
 }
 
@@ -41,6 +85,12 @@ pub struct RenderSettings {
     /// Normal offset of shadow lookups, in texels.
     pub normal_offset: f32,
     pub timings: bool,
+    /// The voxel passes' settings.
+    pub gi: GiSettings,
+    /// With `Mode::VoxelsRadiance`: show the directional volumes at this mip level.
+    pub mip: Option<u32>,
+    /// Nodes that move between frames: voxelized every frame, apart from the static voxels.
+    pub dynamic_nodes: Vec<usize>,
 }
 
 impl Default for RenderSettings {
@@ -48,11 +98,14 @@ impl Default for RenderSettings {
         RenderSettings {
             width: 512,
             height: 512,
-            mode: Mode::Direct,
+            mode: Mode::Full,
             shadow_resolution: 2048,
             pcf_radius: 1,
             normal_offset: 1.5,
             timings: false,
+            gi: GiSettings::default(),
+            mip: None,
+            dynamic_nodes: Vec::new(),
         }
     }
 }
@@ -74,6 +127,9 @@ const GBUFFER_NAMES: [&str; 5] = [
 const DEPTH_FORMAT: vk::Format = vk::Format::D32_SFLOAT;
 /// Texture bindings per material (glsl/material.glsl).
 const MATERIAL_TEXTURES: u32 = 6;
+
+/// Bytes of the per-draw push constants (the voxelization pipeline shares them).
+pub const DRAW_PUSH_SIZE: u32 = std::mem::size_of::<DrawPush>() as u32;
 
 #[repr(C)]
 #[derive(Clone, Copy)]
@@ -117,6 +173,13 @@ pub struct Renderer {
     /// Test hook: record this pass without its barriers.
     pub omit_barriers_of: Option<String>,
     light_count: u32,
+    /// Per instance: moved by a dynamic node (voxelized every frame).
+    dynamic_instances: Vec<bool>,
+    /// The node of each instance.
+    instance_nodes: Vec<usize>,
+    /// The voxel passes (absent in direct mode).
+    pub gi: Option<Gi>,
+    specular_needed: bool,
     ctx: Arc<Context>,
 }
 
@@ -446,10 +509,39 @@ impl Renderer {
             result,
         })?[0];
         let timer = if settings.timings {
-            PassTimer::new(ctx, 32)?
+            PassTimer::new(ctx, 64)?
         } else {
             None
         };
+
+        let dynamic_instances: Vec<bool> = scene
+            .instances
+            .iter()
+            .map(|i| settings.dynamic_nodes.contains(&i.node))
+            .collect();
+        let gi = if settings.mode.uses_voxels() {
+            let gbuffer_views = gbuffer.iter().map(|i| (i.view, nearest.raw)).collect();
+            Some(Gi::new(
+                ctx,
+                scene,
+                &settings.gi,
+                settings.mode.lights_voxels(),
+                dynamic_instances.iter().any(|&d| d),
+                GiInputs {
+                    scene_layout: &scene_layout,
+                    material_layout: &material_layout,
+                    shadow_map: (shadow_map.view, shadow_sampler.raw),
+                    gbuffer: gbuffer_views,
+                    out: &hdr,
+                },
+            )?)
+        } else {
+            None
+        };
+        let specular_needed = scene
+            .materials
+            .iter()
+            .any(|m| m.metallic > 0.0 || m.specular_factor > 0.0);
 
         Ok(Renderer {
             camera: scene.camera.clone(),
@@ -463,6 +555,10 @@ impl Renderer {
                 })
                 .collect(),
             light_count: scene.lights.len() as u32,
+            dynamic_instances,
+            instance_nodes: scene.instances.iter().map(|i| i.node).collect(),
+            gi,
+            specular_needed,
             settings,
             frame_ubo,
             gbuffer,
@@ -513,15 +609,45 @@ impl Renderer {
                 self.settings.pcf_radius as f32,
                 0.0,
             ),
+            ..Default::default()
         };
+        let mut u = u;
+        if let Some(gi) = &self.gi {
+            let grid = gi.volumes.grid;
+            let s = &gi.settings;
+            u.grid = grid.origin.extend(grid.size);
+            u.grid_info = [
+                grid.resolution,
+                s.bounces,
+                gi.cones.len() as u32,
+                gi.flags(),
+            ];
+            u.cone = Vec4::new(
+                (s.cone_aperture_deg.to_radians() * 0.5).tan(),
+                s.step_factor,
+                s.max_distance,
+                gi.emission_scale,
+            );
+            u.trace = Vec4::new(
+                s.start_offset,
+                s.ao_falloff / grid.voxel_size(),
+                if self.specular_needed { 1.0 } else { 0.0 },
+                self.settings.mip.unwrap_or(0) as f32,
+            );
+            for (dst, c) in u.cones.iter_mut().zip(&gi.cones) {
+                *dst = *c;
+            }
+        }
         self.frame_ubo.write(0, as_bytes(&[u]));
     }
 
+    /// Draws the instances `include` accepts; `extra` is each draw's last push constant.
     fn draw_instances(
         &self,
         cmd: vk::CommandBuffer,
         pipeline: &Pipeline,
         extra: impl Fn(usize) -> u32,
+        include: impl Fn(usize) -> bool,
     ) {
         let d = &self.ctx.device;
         unsafe {
@@ -539,9 +665,12 @@ impl Renderer {
             }
             d.cmd_bind_vertex_buffers(cmd, 0, &[self.gpu.vertices.raw], &[0]);
             d.cmd_bind_index_buffer(cmd, self.gpu.indices.raw, 0, vk::IndexType::UINT32);
-            let stages = vk::ShaderStageFlags::VERTEX | vk::ShaderStageFlags::FRAGMENT;
+            let stages = pipeline.push_stages;
             let mut bound = u32::MAX;
             for (i, &(first, count, material)) in self.instances.iter().enumerate() {
+                if !include(i) {
+                    continue;
+                }
                 if material != bound {
                     d.cmd_bind_descriptor_sets(
                         cmd,
@@ -604,7 +733,12 @@ impl Renderer {
             t.collect()?;
         }
         self.timer = timer;
-        submitted
+        submitted?;
+        // The static voxels now hold the static geometry until a static node moves.
+        if let Some(gi) = self.gi.as_mut() {
+            gi.static_dirty = false;
+        }
+        Ok(())
     }
 
     fn record(&self, g: &mut Graph, readback: bool) {
@@ -647,12 +781,72 @@ impl Renderer {
                         .depth_attachment(&depth);
                     unsafe { d.cmd_begin_rendering(cmd, &info) };
                     pipelines::set_viewport(ctx, cmd, res, res);
-                    self.draw_instances(cmd, &self.shadow_pipeline, |_| view);
+                    self.draw_instances(cmd, &self.shadow_pipeline, |_| view, |_| true);
                     unsafe { d.cmd_end_rendering(cmd) };
                 }
             });
         }
 
+        let mode = self.settings.mode;
+        if let Some(gi) = &self.gi {
+            let draw = |dynamic: bool| {
+                move |cmd: vk::CommandBuffer, p: &Pipeline, flags: u32| {
+                    self.draw_instances(
+                        cmd,
+                        p,
+                        |i| self.mirrored(i) | flags,
+                        |i| self.dynamic_instances[i] == dynamic,
+                    )
+                }
+            };
+            gi.record_volumes(
+                ctx,
+                g,
+                &self.gpu,
+                self.scene_set,
+                &self.shadow_map,
+                &draw(false),
+                &draw(true),
+            );
+        }
+
+        if mode.shades_pixels() {
+            self.record_gbuffer(g);
+        }
+        if matches!(mode, Mode::Full | Mode::Direct) {
+            self.record_lighting(g);
+        }
+        if let Some(gi) = &self.gi {
+            let trace_mode = match mode {
+                Mode::Full => TraceMode::Full,
+                Mode::Indirect => TraceMode::Indirect,
+                Mode::Ao => TraceMode::Ao,
+                Mode::VoxelsAlbedo => TraceMode::VoxelAlbedo,
+                Mode::VoxelsNormal => TraceMode::VoxelNormal,
+                Mode::VoxelsEmission => TraceMode::VoxelEmission,
+                Mode::VoxelsRadiance if self.settings.mip.is_some() => TraceMode::Directional,
+                Mode::VoxelsRadiance => TraceMode::VoxelRadiance,
+                Mode::Direct => unreachable!("direct mode has no voxel passes"),
+            };
+            gi.trace.record(
+                ctx,
+                g,
+                &gi.volumes,
+                self.scene_set,
+                &self.gbuffer,
+                &self.hdr,
+                trace_mode,
+            );
+        }
+
+        if readback {
+            self.record_readback(g);
+        }
+    }
+
+    fn record_gbuffer(&self, g: &mut Graph) {
+        let ctx = &self.ctx;
+        let d = &ctx.device;
         let (w, h) = (self.settings.width, self.settings.height);
         let mut pass = g
             .pass("gbuffer")
@@ -704,12 +898,14 @@ impl Renderer {
                 .depth_attachment(&depth);
             unsafe { d.cmd_begin_rendering(cmd, &info) };
             pipelines::set_viewport(ctx, cmd, w, h);
-            self.draw_instances(cmd, &self.gbuffer_pipeline, |i| {
-                self.transforms[i].determinant().is_sign_negative() as u32
-            });
+            self.draw_instances(cmd, &self.gbuffer_pipeline, |i| self.mirrored(i), |_| true);
             unsafe { d.cmd_end_rendering(cmd) };
         });
+    }
 
+    fn record_lighting(&self, g: &mut Graph) {
+        let d = &self.ctx.device;
+        let (w, h) = (self.settings.width, self.settings.height);
         let mut pass = g
             .pass("lighting")
             .image(&self.shadow_map, Access::ComputeSampled)
@@ -730,8 +926,12 @@ impl Renderer {
             );
             d.cmd_dispatch(cmd, w.div_ceil(8), h.div_ceil(8), 1);
         });
+    }
 
-        if readback {
+    fn record_readback(&self, g: &mut Graph) {
+        let d = &self.ctx.device;
+        let (w, h) = (self.settings.width, self.settings.height);
+        {
             g.pass("readback")
                 .image(&self.hdr, Access::TransferRead)
                 .buffer(&self.readback, Access::TransferWrite)
@@ -760,6 +960,25 @@ impl Renderer {
                 .buffer(&self.readback, Access::HostRead)
                 .untimed()
                 .record(|_| {});
+        }
+    }
+
+    fn mirrored(&self, instance: usize) -> u32 {
+        self.transforms[instance].determinant().is_sign_negative() as u32
+    }
+
+    /// Moves every instance of a glTF node. A dynamic node is voxelized again every frame
+    /// anyway; moving a static node voxelizes the static geometry again on the next frame.
+    pub fn set_node_transform(&mut self, node: usize, world: Mat4) {
+        let mut moved_static = false;
+        for (i, &n) in self.instance_nodes.iter().enumerate() {
+            if n == node {
+                self.transforms[i] = world;
+                moved_static |= !self.dynamic_instances[i];
+            }
+        }
+        if let (true, Some(gi)) = (moved_static, self.gi.as_mut()) {
+            gi.static_dirty = true;
         }
     }
 

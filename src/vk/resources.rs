@@ -181,6 +181,8 @@ pub struct Image {
     pub view: vk::ImageView,
     /// One 2D view per array layer (for rendering into layers), empty for 1-layer images.
     pub layer_views: Vec<vk::ImageView>,
+    /// One view per mip level of a mipmapped 3D image (storage writes take a single level).
+    pub level_views: Vec<vk::ImageView>,
     allocation: Option<Allocation>,
     pub name: String,
 }
@@ -223,6 +225,7 @@ impl Image {
             desc: desc.clone(),
             view: vk::ImageView::null(),
             layer_views: Vec::new(),
+            level_views: Vec::new(),
             allocation: None,
             name: name.into(),
         };
@@ -239,10 +242,16 @@ impl Image {
             (_, false) => vk::ImageViewType::TYPE_2D,
             (_, true) => vk::ImageViewType::TYPE_2D_ARRAY,
         };
-        image.view = image.make_view(view_type, 0, desc.array_layers)?;
+        image.view = image.make_view(view_type, 0, desc.array_layers, 0, desc.mip_levels)?;
+        if desc.image_type == vk::ImageType::TYPE_3D && desc.mip_levels > 1 {
+            for level in 0..desc.mip_levels {
+                let v = image.make_view(view_type, 0, 1, level, 1)?;
+                image.level_views.push(v);
+            }
+        }
         if desc.array_layers > 1 {
             for layer in 0..desc.array_layers {
-                let v = image.make_view(vk::ImageViewType::TYPE_2D, layer, 1)?;
+                let v = image.make_view(vk::ImageViewType::TYPE_2D, layer, 1, 0, 1)?;
                 image.layer_views.push(v);
             }
         }
@@ -254,6 +263,8 @@ impl Image {
         view_type: vk::ImageViewType,
         base_layer: u32,
         layers: u32,
+        base_level: u32,
+        levels: u32,
     ) -> VkResult<vk::ImageView> {
         let info = vk::ImageViewCreateInfo::default()
             .image(self.raw)
@@ -261,12 +272,20 @@ impl Image {
             .format(self.desc.format)
             .subresource_range(vk::ImageSubresourceRange {
                 aspect_mask: aspect_of(self.desc.format),
-                base_mip_level: 0,
-                level_count: self.desc.mip_levels,
+                base_mip_level: base_level,
+                level_count: levels,
                 base_array_layer: base_layer,
                 layer_count: layers,
             });
         unsafe { self.ctx.device.create_image_view(&info, None) }.check("vkCreateImageView")
+    }
+
+    /// A view of one mip level (the whole view for images without level views).
+    pub fn level_view(&self, level: u32) -> vk::ImageView {
+        self.level_views
+            .get(level as usize)
+            .copied()
+            .unwrap_or(self.view)
     }
 
     /// A 2D view of one array layer (the whole view for single-layer images).
@@ -302,6 +321,9 @@ impl Image {
 impl Drop for Image {
     fn drop(&mut self) {
         unsafe {
+            for v in self.level_views.drain(..).rev() {
+                self.ctx.device.destroy_image_view(v, None);
+            }
             for v in self.layer_views.drain(..).rev() {
                 self.ctx.device.destroy_image_view(v, None);
             }

@@ -89,10 +89,18 @@ impl PassTimer {
         } else {
             (1u64 << self.ctx.timestamp_valid_bits) - 1
         };
+        // Scopes of the same name within a frame add up (e.g. one per mip level).
+        let mut frame: Vec<(String, f64)> = Vec::new();
         for (i, name) in self.names.drain(..).enumerate() {
             let t0 = data[2 * i] & mask;
             let t1 = data[2 * i + 1] & mask;
             let ms = t1.wrapping_sub(t0) as f64 * period / 1e6;
+            match frame.iter_mut().find(|(n, _)| *n == name) {
+                Some((_, t)) => *t += ms,
+                None => frame.push((name, ms)),
+            }
+        }
+        for (name, ms) in frame {
             match self.samples.iter_mut().find(|(n, _)| *n == name) {
                 Some((_, v)) => v.push(ms),
                 None => self.samples.push((name, vec![ms])),

@@ -1,0 +1,34 @@
+// Anisotropic mipmapping, step 3 of the paper: six directional volumes, one per direction a cone
+// can travel (-X, +X, -Y, +Y, -Z, +Z). A texel of a face volume holds a 2x2x2 block seen from that
+// direction: along the direction, the two voxels composite front to back
+// (front + back * (1 - front.a), premultiplied); across it, the four columns average.
+#ifndef ANISO_MIP_GLSL
+#define ANISO_MIP_GLSL
+
+#ifdef PAPER
+#define VOLUME_FORMAT rgba8
+#else
+#define VOLUME_FORMAT rgba16f
+#endif
+
+// block[x + 2y + 4z]: the 2x2x2 source texels; face 0..5 = -X, +X, -Y, +Y, -Z, +Z.
+vec4 reduce_block(vec4 block[8], int face) {
+    int axis = face / 2;
+    // A cone travelling towards -axis meets the higher coordinate first.
+    int front = (face % 2 == 0) ? 1 : 0;
+    vec4 sum = vec4(0.0);
+    for (int a = 0; a < 2; a++) {
+        for (int b = 0; b < 2; b++) {
+            ivec3 f, k;
+            if (axis == 0) { f = ivec3(front, a, b); k = ivec3(1 - front, a, b); }
+            else if (axis == 1) { f = ivec3(a, front, b); k = ivec3(a, 1 - front, b); }
+            else { f = ivec3(a, b, front); k = ivec3(a, b, 1 - front); }
+            vec4 fv = block[f.x + 2 * f.y + 4 * f.z];
+            vec4 bv = block[k.x + 2 * k.y + 4 * k.z];
+            sum += fv + bv * (1.0 - fv.a);
+        }
+    }
+    return sum * 0.25;
+}
+
+#endif

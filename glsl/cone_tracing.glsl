@@ -1,0 +1,95 @@
+// Cone tracing, step 4 of the paper: march a cone through the voxels, sampling the directional
+// volumes at the mip level whose texels match the cone's diameter, and composite front to back.
+// Define CONE_SET (descriptor set) and CONE_FULL_RES (1: the full-resolution radiance volume is
+// bound and mixed in for cones narrower than the directional volumes' texels) before including.
+#ifndef CONE_TRACING_GLSL
+#define CONE_TRACING_GLSL
+
+#if CONE_FULL_RES
+layout(set = CONE_SET, binding = 0) uniform sampler3D radiance_tex;
+#endif
+layout(set = CONE_SET, binding = 1) uniform sampler3D aniso_nx;
+layout(set = CONE_SET, binding = 2) uniform sampler3D aniso_px;
+layout(set = CONE_SET, binding = 3) uniform sampler3D aniso_ny;
+layout(set = CONE_SET, binding = 4) uniform sampler3D aniso_py;
+layout(set = CONE_SET, binding = 5) uniform sampler3D aniso_nz;
+layout(set = CONE_SET, binding = 6) uniform sampler3D aniso_pz;
+
+// The directional volumes seen by a cone travelling along `dir`, weighted by dir^2.
+vec4 sample_directional(vec3 uvw, vec3 dir, float level) {
+    vec3 w = dir * dir;
+    // With an odd grid the directional volumes cover one voxel more than the grid.
+    uvw *= float(grid_n()) / float(2 * textureSize(aniso_nx, 0).x);
+    vec4 sx = dir.x < 0.0 ? textureLod(aniso_nx, uvw, level) : textureLod(aniso_px, uvw, level);
+    vec4 sy = dir.y < 0.0 ? textureLod(aniso_ny, uvw, level) : textureLod(aniso_py, uvw, level);
+    vec4 sz = dir.z < 0.0 ? textureLod(aniso_nz, uvw, level) : textureLod(aniso_pz, uvw, level);
+    return w.x * sx + w.y * sy + w.z * sz;
+}
+
+// What a cone of world diameter `diameter` sees at grid coordinates `uvw`.
+vec4 sample_cone(vec3 uvw, vec3 dir, float diameter) {
+    float vs = voxel_size();
+#ifdef PAPER
+    // The original's "voxelWorldSize" is two voxels, and it subtracts one more level.
+    float lod = log2(diameter / (2.0 * vs));
+    vec4 s = sample_directional(uvw, dir, max(lod - 1.0, 0.0));
+#if CONE_FULL_RES
+    if (lod < 1.0) s = mix(textureLod(radiance_tex, uvw, 0.0), s, clamp(lod, 0.0, 1.0));
+#endif
+#else
+    // Level 0 of the directional volumes has texels of two voxels.
+    float level = log2(max(diameter, vs) / vs);
+    vec4 s = sample_directional(uvw, dir, max(level - 1.0, 0.0));
+#if CONE_FULL_RES
+    if (level < 1.0) s = mix(textureLod(radiance_tex, uvw, 0.0), s, level);
+#endif
+#endif
+    return s;
+}
+
+struct Cone {
+    vec3 radiance;   // premultiplied, composited front to back
+    float opacity;
+    float occlusion; // the paper's ambient-occlusion accumulation
+};
+
+// Traces from `origin` (already moved off the surface) along unit `dir`; `tan_half` is the tangent
+// of the cone's half angle; `t0` the first sample's distance; stops at `max_dist` or when opaque.
+Cone trace_cone(vec3 origin, vec3 dir, float tan_half, float t0, float max_dist) {
+    Cone cone = Cone(vec3(0.0), 0.0, 0.0);
+    float vs = voxel_size();
+    float t = t0;
+    for (int i = 0; i < 1024 && t < max_dist && cone.opacity < 0.99; i++) {
+        vec3 uvw = world_to_grid(origin + dir * t);
+        if (any(lessThan(uvw, vec3(0.0))) || any(greaterThan(uvw, vec3(1.0)))) break;
+#ifdef PAPER
+        float diameter = 2.0 * tan_half * t;
+#else
+        float diameter = max(2.0 * tan_half * t, vs);
+#endif
+        vec4 s = sample_cone(uvw, dir, diameter);
+        cone.radiance += (1.0 - cone.opacity) * s.rgb;
+        cone.opacity += (1.0 - cone.opacity) * s.a;
+        cone.occlusion += (1.0 - cone.occlusion) * s.a / (1.0 + frame.trace.y * diameter);
+        t += max(diameter * frame.cone.y, 0.1 * vs);
+    }
+    return cone;
+}
+
+// An orthonormal frame around n (z = n).
+mat3 tangent_frame(vec3 n) {
+#ifdef PAPER
+    // The original's guide vector, (0,1,0), or (0,0,1) when n is along it.
+    vec3 guide = abs(dot(n, vec3(0.0, 1.0, 0.0))) > 0.999 ? vec3(0.0, 0.0, 1.0) : vec3(0.0, 1.0, 0.0);
+    vec3 t = normalize(cross(guide, n));
+#else
+    // Branchless basis (Duff et al. 2017): no division by a vanishing cross product.
+    float s = n.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (s + n.z);
+    float b = n.x * n.y * a;
+    vec3 t = vec3(1.0 + s * n.x * n.x * a, s * b, -s * n.x);
+#endif
+    return mat3(t, cross(n, t), n);
+}
+
+#endif

@@ -1,0 +1,66 @@
+#version 450
+// variants: PAPER
+// Second bounce (the paper's inject_propagation): every voxel gathers the light the directional
+// volumes hold around it with diffuse cones and adds what it reflects to its radiance; the mip
+// passes then run again. Default: the pixel pass's cone set and albedo / pi; a two-sided voxel
+// gathers both sides. PAPER: 4 cones of aperture 1, weights pi/3 and 2pi/9, clamped to 1.
+#include "common.glsl"
+#include "voxel_common.glsl"
+#define VOXEL_SET 1
+#include "voxel_data.glsl"
+#define CONE_SET 2
+#define CONE_FULL_RES 0
+#include "cone_tracing.glsl"
+
+layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
+
+#ifdef PAPER
+layout(set = 1, binding = 5, rgba8) uniform image3D radiance;
+#else
+layout(set = 1, binding = 5, rgba16f) uniform image3D radiance;
+#endif
+
+vec3 gather(vec3 p, vec3 n) {
+    mat3 frame_n = tangent_frame(n);
+    float vs = voxel_size();
+    float max_dist = frame.cone.z * frame.grid.w;
+    vec3 e = vec3(0.0);
+#ifdef PAPER
+    const vec3 dirs[4] = vec3[4](vec3(0.0, 0.0, 1.0), vec3(0.0, 0.866025, 0.5),
+                                 vec3(0.754996, -0.4330128, 0.5), vec3(-0.754996, -0.4330128, 0.5));
+    const float weights[4] = float[4](PI / 3.0, 2.0 * PI / 9.0, 2.0 * PI / 9.0, 2.0 * PI / 9.0);
+    vec3 origin = p + n * 2.0 * vs;  // one directional-volume texel
+    for (int i = 0; i < 4; i++) {
+        vec3 d = normalize(frame_n * dirs[i]);
+        e += weights[i] * trace_cone(origin, d, 1.0, 2.0 * vs, max_dist).radiance;
+    }
+#else
+    vec3 origin = p + n * frame.trace.x * vs;
+    for (uint i = 0u; i < frame.grid_info.z; i++) {
+        vec3 d = normalize(frame_n * frame.cones[i].xyz);
+        e += frame.cones[i].w * trace_cone(origin, d, frame.cone.x, vs, max_dist).radiance;
+    }
+#endif
+    return e;
+}
+
+void main() {
+    ivec3 c = ivec3(gl_GlobalInvocationID);
+    if (!in_grid(c)) return;
+    Voxel v = load_voxel(c);
+    if (!v.filled) return;
+    vec4 direct = imageLoad(radiance, c);
+#ifdef PAPER
+    vec3 p = frame.grid.xyz + vec3(c) * voxel_size();
+    vec3 n = dot(v.normal, v.normal) > 0.0 ? v.normal : vec3(0.0, 1.0, 0.0);
+    vec3 bounce = clamp(gather(p, n), 0.0, 1.0) * v.albedo;
+#else
+    vec3 p = voxel_centre(c);
+    vec3 n = dot(v.normal, v.normal) > 0.0 ? v.normal
+           : (v.axis_weights.x >= max(v.axis_weights.y, v.axis_weights.z) ? vec3(1.0, 0.0, 0.0)
+           : (v.axis_weights.y >= v.axis_weights.z ? vec3(0.0, 1.0, 0.0) : vec3(0.0, 0.0, 1.0)));
+    vec3 e = v.agreement < 0.5 ? 0.5 * (gather(p, n) + gather(p, -n)) : gather(p, n);
+    vec3 bounce = v.albedo / PI * e;
+#endif
+    imageStore(radiance, c, vec4(direct.rgb + bounce, direct.a));
+}

@@ -1,0 +1,65 @@
+#version 450
+// variants: PAPER
+// Voxel illumination, step 2 of the paper: the direct light every voxel receives, with the
+// paper's normal-weighted attenuation, shadowed by the shadow maps, plus its emission, stored as
+// outgoing radiance (premultiplied by opacity) in the radiance volume. The default divides by pi
+// (the original forgot), lights the voxel centre, and treats voxels whose normals cancelled
+// (thin two-sided panels) as lit from both sides. PAPER: voxel corner, no 1/pi, RGBA8 radiance.
+#include "common.glsl"
+#include "voxel_common.glsl"
+#include "lights.glsl"
+#define VOXEL_SET 1
+#include "voxel_data.glsl"
+
+layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
+
+layout(set = 1, binding = 4) uniform sampler2DArrayShadow shadow_map;
+#ifdef PAPER
+layout(set = 1, binding = 5, rgba8) uniform writeonly image3D radiance;
+#else
+layout(set = 1, binding = 5, rgba16f) uniform writeonly image3D radiance;
+#endif
+
+void main() {
+    ivec3 c = ivec3(gl_GlobalInvocationID);
+    if (!in_grid(c)) return;
+    Voxel v = load_voxel(c);
+    if (!v.filled) {
+        imageStore(radiance, c, vec4(0.0));
+        return;
+    }
+    float vs = voxel_size();
+#ifdef PAPER
+    vec3 p = frame.grid.xyz + vec3(c) * vs;
+    bool two_sided = false;
+#else
+    vec3 p = voxel_centre(c);
+    bool two_sided = v.agreement < 0.5;
+#endif
+    vec3 n = v.normal;
+    vec3 w = v.axis_weights;
+
+    vec3 irradiance = vec3(0.0);
+    for (uint i = 0u; i < frame.counts.x; i++) {
+        Light light = lights[i];
+        vec3 l;
+        float dist;
+        vec3 e = light_irradiance(light, p, l, dist);
+        // Normal-weighted attenuation: per axis, the light along that axis on the side the
+        // surface faces, weighted by how much the surface faces that axis. A two-sided voxel
+        // faces both ways.
+        vec3 d = two_sided ? abs(l) : max(sign(n) * l, vec3(0.0));
+        float n_dot_l = dot(w, d);
+        if (n_dot_l <= 0.0 || all(equal(e, vec3(0.0)))) continue;
+        // The shadow is looked up half a voxel out, on the side facing the light.
+        vec3 side = (two_sided || dot(n, n) == 0.0) ? l : n;
+        float vis = shadow_visibility(light, p + side * 0.5 * vs, side, shadow_map);
+        irradiance += e * n_dot_l * vis;
+    }
+#ifdef PAPER
+    vec3 outgoing = v.albedo * irradiance + v.emission;
+#else
+    vec3 outgoing = v.albedo / PI * irradiance + v.emission;
+#endif
+    imageStore(radiance, c, vec4(outgoing, 1.0));
+}

@@ -1,0 +1,25 @@
+// The voxel grid: a cube of N^3 voxels over the scene (frame.grid), and the fixed-point
+// accumulators the default voxelization averages into (sums and a 32-bit count per voxel, so
+// the average neither wraps, drifts nor drops fragments as the paper's RGBA8 average does).
+#ifndef VOXEL_COMMON_GLSL
+#define VOXEL_COMMON_GLSL
+
+// Per voxel: count, albedo r g b, normal x y z (two's complement), squared normal x y z.
+// The squared normals keep the axes a voxel's surfaces face even where opposite normals cancel.
+const uint ACCUM_STRIDE = 10u;
+// Per voxel: emission r g b (scaled by frame.cone.w).
+const uint EMISSION_STRIDE = 3u;
+// 12 fractional bits: a 32-bit sum holds 2^20 fragments of value 1; the quantisation of one
+// fragment (1/4096) is 16 times finer than the paper's 8-bit channels.
+const float FIXED_ONE = 4096.0;
+
+int grid_n() { return int(frame.grid_info.x); }
+float voxel_size() { return frame.grid.w / float(frame.grid_info.x); }
+
+// World position to grid texture coordinates [0, 1]^3.
+vec3 world_to_grid(vec3 p) { return (p - frame.grid.xyz) / frame.grid.w; }
+vec3 voxel_centre(ivec3 c) { return frame.grid.xyz + (vec3(c) + 0.5) * voxel_size(); }
+bool in_grid(ivec3 c) { return all(greaterThanEqual(c, ivec3(0))) && all(lessThan(c, ivec3(grid_n()))); }
+uint voxel_index(ivec3 c) { int n = grid_n(); return uint(c.x + n * (c.y + n * c.z)); }
+
+#endif

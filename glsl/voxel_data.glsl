@@ -1,0 +1,78 @@
+// Reading a voxel back from what voxelization wrote. Define VOXEL_SET before including.
+// Default: fixed-point sums and counts of the static and (when present) dynamic passes,
+// averaged here. PAPER: the RGBA8 moving averages, empty when the 8-bit count reads 0.
+#ifndef VOXEL_DATA_GLSL
+#define VOXEL_DATA_GLSL
+
+#include "atomic_average.glsl"
+
+struct Voxel {
+    bool filled;
+    vec3 albedo;
+    vec3 normal;        // unit, or zero when the averaged normals cancelled
+    float agreement;    // length of the averaged unit normals: 1 flat, ~0 opposite faces
+    vec3 axis_weights;  // mean squared normal: how much the surfaces face each axis (sums to 1)
+    vec3 emission;
+};
+
+#ifdef PAPER
+layout(set = VOXEL_SET, binding = 0, r32ui) uniform readonly uimage3D albedo_grid;
+layout(set = VOXEL_SET, binding = 1, r32ui) uniform readonly uimage3D normal_grid;
+layout(set = VOXEL_SET, binding = 2, r32ui) uniform readonly uimage3D emission_grid;
+
+Voxel load_voxel(ivec3 c) {
+    Voxel v;
+    vec4 a = unpack_rgba8(imageLoad(albedo_grid, c).r);
+    v.filled = a.a > 0.0;
+    v.albedo = a.rgb / 255.0;
+    vec3 n = unpack_rgba8(imageLoad(normal_grid, c).r).rgb / 255.0 * 2.0 - 1.0;
+    v.agreement = length(n);
+    v.normal = v.agreement > 0.0 ? n / v.agreement : vec3(0.0);
+    v.axis_weights = v.normal * v.normal;
+    v.emission = (frame.grid_info.w & FLAG_EMISSIVE) != 0u
+        ? unpack_rgba8(imageLoad(emission_grid, c).r).rgb / 255.0 : vec3(0.0);
+    return v;
+}
+#else
+layout(set = VOXEL_SET, binding = 0, std430) readonly buffer StaticAccum { uint static_accum[]; };
+layout(set = VOXEL_SET, binding = 1, std430) readonly buffer StaticEmission { uint static_emission[]; };
+layout(set = VOXEL_SET, binding = 2, std430) readonly buffer DynamicAccum { uint dynamic_accum[]; };
+layout(set = VOXEL_SET, binding = 3, std430) readonly buffer DynamicEmission { uint dynamic_emission[]; };
+
+Voxel load_voxel(ivec3 c) {
+    Voxel v;
+    uint i = voxel_index(c) * ACCUM_STRIDE;
+    uint count = static_accum[i];
+    uvec3 a = uvec3(static_accum[i + 1u], static_accum[i + 2u], static_accum[i + 3u]);
+    ivec3 n = ivec3(static_accum[i + 4u], static_accum[i + 5u], static_accum[i + 6u]);
+    uvec3 n2 = uvec3(static_accum[i + 7u], static_accum[i + 8u], static_accum[i + 9u]);
+    bool dynamic = (frame.grid_info.w & FLAG_DYNAMIC) != 0u;
+    if (dynamic) {
+        count += dynamic_accum[i];
+        a += uvec3(dynamic_accum[i + 1u], dynamic_accum[i + 2u], dynamic_accum[i + 3u]);
+        n += ivec3(dynamic_accum[i + 4u], dynamic_accum[i + 5u], dynamic_accum[i + 6u]);
+        n2 += uvec3(dynamic_accum[i + 7u], dynamic_accum[i + 8u], dynamic_accum[i + 9u]);
+    }
+    v.filled = count > 0u;
+    float inv = v.filled ? 1.0 / (float(count) * FIXED_ONE) : 0.0;
+    v.albedo = vec3(a) * inv;
+    vec3 nf = vec3(n) * inv;
+    v.agreement = length(nf);
+    v.normal = v.agreement > 1e-6 ? nf / v.agreement : vec3(0.0);
+    vec3 w = vec3(n2) * inv;
+    float ws = w.x + w.y + w.z;
+    v.axis_weights = ws > 0.0 ? w / ws : vec3(1.0 / 3.0);
+    v.emission = vec3(0.0);
+    if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u && v.filled) {
+        uint j = voxel_index(c) * EMISSION_STRIDE;
+        uvec3 e = uvec3(static_emission[j], static_emission[j + 1u], static_emission[j + 2u]);
+        if (dynamic) {
+            e += uvec3(dynamic_emission[j], dynamic_emission[j + 1u], dynamic_emission[j + 2u]);
+        }
+        v.emission = vec3(e) / (float(count) * frame.cone.w);
+    }
+    return v;
+}
+#endif
+
+#endif

@@ -1,0 +1,106 @@
+#version 450
+// variants: PAPER
+// Voxelization, step 1 of the paper: each fragment averages the surface's albedo, normal and
+// emission into its voxel. The default path sums fixed-point values with a 32-bit count
+// (atomicAdd), writes every voxel the triangle crosses within the pixel's column (so a closed mesh
+// stays watertight), and keeps emission HDR. PAPER: the original imageAtomicRGBA8Avg into RGBA8
+// volumes through r32ui views, one voxel per fragment, normals encoded n * 0.5 + 0.5.
+#include "common.glsl"
+#include "material.glsl"
+#include "voxel_common.glsl"
+
+layout(push_constant) uniform Draw {
+    mat4 model;
+    uint material;
+    uint flags;   // bit 0: mirrored transform; bit 1: static pass (PAPER: writes the flag)
+} draw;
+
+layout(location = 0) in vec3 g_normal;
+layout(location = 1) in vec2 g_uv;
+layout(location = 2) flat in vec4 g_aabb;
+layout(location = 3) flat in vec4 g_plane;
+layout(location = 4) flat in vec2 g_depth;
+layout(location = 5) flat in int g_axis;
+
+#ifdef PAPER
+#include "atomic_average.glsl"
+layout(set = 2, binding = 0, r32ui) uniform coherent volatile uimage3D albedo_grid;
+layout(set = 2, binding = 1, r32ui) uniform coherent volatile uimage3D normal_grid;
+layout(set = 2, binding = 2, r32ui) uniform coherent volatile uimage3D emission_grid;
+layout(set = 2, binding = 3, r32ui) uniform uimage3D static_flag;
+RGBA8_AVG(average_albedo, albedo_grid)
+RGBA8_AVG(average_normal, normal_grid)
+RGBA8_AVG(average_emission, emission_grid)
+#else
+layout(set = 2, binding = 0, std430) buffer Accum { uint accum[]; };
+layout(set = 2, binding = 1, std430) buffer EmissionAccum { uint emission_accum[]; };
+#endif
+
+// Grid coordinates from (u, v, depth) of the projection along g_axis.
+ivec3 unswizzle(ivec3 c) {
+    return g_axis == 0 ? c.zxy : (g_axis == 1 ? c.yzx : c.xyz);
+}
+
+void main() {
+    vec2 px = gl_FragCoord.xy;
+    if (any(lessThan(px, g_aabb.xy)) || any(greaterThan(px, g_aabb.zw))) discard;
+
+    Material m = materials[draw.material];
+    vec4 base = m.base_color * texture(t_base_color, g_uv);
+    if (m.params.w >= 0.0 && base.a < m.params.w) discard;
+    vec3 emission = m.emissive.rgb * texture(t_emissive, g_uv).rgb;
+    float nl = length(g_normal);
+    vec3 normal = nl > 1e-8 ? g_normal / nl : vec3(0.0);
+
+    float depth = dot(g_plane.xy, px) + g_plane.z;
+#ifdef PAPER
+    ivec3 c = unswizzle(ivec3(ivec2(px), int(depth)));
+    if (!in_grid(c)) return;  // dilated triangles reach -1 and N: no-ops in GL, UB in Vulkan
+    bool static_pass = (draw.flags & 2u) != 0u;
+    if (!static_pass && (frame.grid_info.w & FLAG_DYNAMIC) != 0u
+        && imageLoad(static_flag, c).r != 0u) {
+        return;  // the paper hides dynamic geometry inside static voxels
+    }
+    average_albedo(c, vec4(base.rgb, 1.0));
+    average_normal(c, vec4(normal * 0.5 + 0.5, 1.0));
+    if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u) {
+        average_emission(c, vec4(emission, 1.0));
+    }
+    if (static_pass && (frame.grid_info.w & FLAG_DYNAMIC) != 0u) {
+        imageStore(static_flag, c, uvec4(1u));
+    }
+#else
+    // Every voxel of this column the triangle's plane crosses within the pixel, clamped to the
+    // triangle's own depth range.
+    float half_span = 0.5 * (abs(g_plane.x) + abs(g_plane.y));
+    float lo = max(depth - half_span, g_depth.x);
+    float hi = min(depth + half_span, g_depth.y);
+    int z0 = int(floor(min(lo, hi)));
+    int z1 = int(floor(max(lo, hi)));
+    uvec3 a = uvec3(round(clamp(base.rgb, 0.0, 1.0) * FIXED_ONE));
+    ivec3 nq = ivec3(round(normal * FIXED_ONE));
+    uvec3 n2 = uvec3(round(normal * normal * FIXED_ONE));
+    uvec3 e = uvec3(round(max(emission, vec3(0.0)) * frame.cone.w));
+    for (int z = z0; z <= z1 && z <= z0 + 2; z++) {
+        ivec3 c = unswizzle(ivec3(ivec2(px), z));
+        if (!in_grid(c)) continue;
+        uint i = voxel_index(c) * ACCUM_STRIDE;
+        atomicAdd(accum[i], 1u);
+        atomicAdd(accum[i + 1u], a.r);
+        atomicAdd(accum[i + 2u], a.g);
+        atomicAdd(accum[i + 3u], a.b);
+        atomicAdd(accum[i + 4u], uint(nq.x));
+        atomicAdd(accum[i + 5u], uint(nq.y));
+        atomicAdd(accum[i + 6u], uint(nq.z));
+        atomicAdd(accum[i + 7u], n2.x);
+        atomicAdd(accum[i + 8u], n2.y);
+        atomicAdd(accum[i + 9u], n2.z);
+        if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u) {
+            uint j = voxel_index(c) * EMISSION_STRIDE;
+            atomicAdd(emission_accum[j], e.r);
+            atomicAdd(emission_accum[j + 1u], e.g);
+            atomicAdd(emission_accum[j + 2u], e.b);
+        }
+    }
+#endif
+}

@@ -1,0 +1,134 @@
+//! Step 2: voxel illumination. Direct light per voxel (shadowed by the shadow maps), plus
+//! emission, into the radiance volume.
+
+use super::volumes::{Volumes, VoxelData};
+use crate::render::pipelines::{self, Desc, DescriptorPool, Pipeline, Set, SetLayout, Spec};
+use crate::vk::{vk, Access, Context, Graph, Image, VkResult};
+use std::sync::Arc;
+
+/// The voxel data as the compute passes read it (bindings 0 to 3 of glsl/voxel_data.glsl).
+pub fn voxel_data_descs<'a>(volumes: &'a Volumes) -> Vec<(u32, Desc<'a>)> {
+    match &volumes.data {
+        VoxelData::Sums {
+            static_accum,
+            static_emission,
+            dynamic_accum,
+            dynamic_emission,
+        } => {
+            let or_dummy = |b: &'a Option<crate::vk::Buffer>| {
+                Desc::Storage(b.as_ref().unwrap_or(&volumes.dummy))
+            };
+            vec![
+                (0, Desc::Storage(static_accum)),
+                (1, or_dummy(static_emission)),
+                (2, or_dummy(dynamic_accum)),
+                (3, or_dummy(dynamic_emission)),
+            ]
+        }
+        VoxelData::Paper {
+            albedo,
+            normal,
+            emission,
+            ..
+        } => vec![
+            (0, Desc::StorageImage(albedo.view)),
+            (1, Desc::StorageImage(normal.view)),
+            (
+                2,
+                Desc::StorageImage(emission.as_ref().unwrap_or(albedo).view),
+            ),
+        ],
+    }
+}
+
+/// Declares a compute read of the voxel data.
+pub fn read_voxel_data<'g, 'a, 'r>(
+    mut pass: crate::vk::graph::PassBuilder<'g, 'a, 'r>,
+    volumes: &'r Volumes,
+) -> crate::vk::graph::PassBuilder<'g, 'a, 'r> {
+    match &volumes.data {
+        VoxelData::Sums {
+            static_accum,
+            static_emission,
+            dynamic_accum,
+            dynamic_emission,
+        } => {
+            for b in std::iter::once(static_accum)
+                .chain(static_emission)
+                .chain(dynamic_accum)
+                .chain(dynamic_emission)
+            {
+                pass = pass.buffer(b, Access::ComputeStorageRead);
+            }
+        }
+        VoxelData::Paper {
+            albedo,
+            normal,
+            emission,
+            ..
+        } => {
+            for i in std::iter::once(albedo).chain([normal]).chain(emission) {
+                pass = pass.image(i, Access::ComputeStorageRead);
+            }
+        }
+    }
+    pass
+}
+
+pub struct Inject {
+    pipeline: Pipeline,
+    set: Set,
+}
+
+impl Inject {
+    pub fn new(
+        ctx: &Arc<Context>,
+        pool: &DescriptorPool,
+        volumes: &Volumes,
+        scene_layout: &SetLayout,
+        shadow_map: (vk::ImageView, vk::Sampler),
+        paper: bool,
+    ) -> VkResult<Inject> {
+        let mut descs = voxel_data_descs(volumes);
+        descs.push((4, Desc::Sampled(shadow_map.0, shadow_map.1)));
+        descs.push((5, Desc::StorageImage(volumes.radiance.view)));
+        let set = pool.set(vk::ShaderStageFlags::COMPUTE, &descs)?;
+        let shader = if paper {
+            "inject_radiance.comp:PAPER"
+        } else {
+            "inject_radiance.comp"
+        };
+        let pipeline =
+            pipelines::compute(ctx, shader, &[scene_layout, &set.layout], 0, &Spec(vec![]))?;
+        Ok(Inject { pipeline, set })
+    }
+
+    pub fn record(
+        &self,
+        ctx: &Context,
+        g: &mut Graph,
+        volumes: &Volumes,
+        scene_set: vk::DescriptorSet,
+        shadow_map: &Image,
+    ) {
+        let d = &ctx.device;
+        let n = volumes.grid.resolution;
+        read_voxel_data(g.pass("inject"), volumes)
+            .image(shadow_map, Access::ComputeSampled)
+            .image(&volumes.radiance, Access::ComputeStorageWrite)
+            .record(|cmd| unsafe {
+                let p = &self.pipeline;
+                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, p.raw);
+                d.cmd_bind_descriptor_sets(
+                    cmd,
+                    vk::PipelineBindPoint::COMPUTE,
+                    p.layout,
+                    0,
+                    &[scene_set, self.set.raw],
+                    &[],
+                );
+                let groups = n.div_ceil(4);
+                d.cmd_dispatch(cmd, groups, groups, groups);
+            });
+    }
+}

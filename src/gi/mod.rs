@@ -1,0 +1,390 @@
+//! Deferred voxel shading (Villegas and Ramirez 2016), the four steps and the second bounce:
+//! `voxelize` (scene to voxels), `inject` (direct light per voxel), `mip` (six directional
+//! volumes), `bounce` (a second bounce), `trace` (cones per pixel, and the debug views).
+
+mod bounce;
+mod inject;
+mod mip;
+mod trace;
+mod volumes;
+mod voxelize;
+
+pub use volumes::{VolumeInfo, Volumes};
+
+use crate::scene::Aabb;
+use glam::{Vec3, Vec4};
+
+pub use bounce::Bounce;
+pub use inject::Inject;
+pub use mip::Mip;
+pub use trace::{Trace, TraceMode};
+pub use voxelize::Voxelizer;
+
+/// Settings of the voxel passes. `Default` is the project's default; `paper()` the original's.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GiSettings {
+    /// Voxels per side of the grid.
+    pub voxels: u32,
+    /// 1: direct light in the voxels only; 2: plus the second bounce.
+    pub bounces: u32,
+    /// Reproduce the original's behaviour and constants.
+    pub paper: bool,
+    /// Diffuse cones per pixel (1 to 16).
+    pub cone_count: u32,
+    /// Full aperture of each diffuse cone, in degrees.
+    pub cone_aperture_deg: f32,
+    /// Step length as a fraction of the cone diameter.
+    pub step_factor: f32,
+    /// Longest cone, as a fraction of the grid's edge.
+    pub max_distance: f32,
+    /// How far cones start off the surface, in voxels.
+    pub start_offset: f32,
+    /// The paper's AO falloff (occlusion / (1 + falloff x diameter in metres)).
+    pub ao_falloff: f32,
+    /// Voxel visibility by tracing the voxels instead of the shadow maps.
+    pub voxel_shadows: bool,
+}
+
+impl Default for GiSettings {
+    fn default() -> Self {
+        GiSettings {
+            voxels: 128,
+            bounces: 2,
+            paper: false,
+            cone_count: 6,
+            cone_aperture_deg: 60.0,
+            step_factor: 0.5,
+            max_distance: 0.95,
+            start_offset: 1.0,
+            ao_falloff: 1.0,
+            voxel_shadows: false,
+        }
+    }
+}
+
+impl GiSettings {
+    /// The original's constants (PAPER_NOTES.md): 6 cones of 60 degrees, step 0.5 x diameter,
+    /// 0.95 of the grid, a start 2 voxels off the surface.
+    pub fn paper(voxels: u32) -> Self {
+        GiSettings {
+            voxels,
+            paper: true,
+            cone_count: 6,
+            cone_aperture_deg: 60.0,
+            step_factor: 0.5,
+            max_distance: 0.95,
+            start_offset: 2.0,
+            ..Default::default()
+        }
+    }
+}
+
+/// The voxel grid: a cube over the scene bounds, N voxels per side.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct VoxelGrid {
+    pub origin: Vec3,
+    pub size: f32,
+    pub resolution: u32,
+}
+
+impl VoxelGrid {
+    /// A cube of the bounds' largest extent, centred on them, one voxel wider on each side so
+    /// that surfaces on the bounds lie inside.
+    pub fn fit(bounds: &Aabb, resolution: u32) -> VoxelGrid {
+        let resolution = resolution.max(2);
+        if bounds.is_empty() {
+            return VoxelGrid {
+                origin: Vec3::splat(-1.0),
+                size: 2.0,
+                resolution,
+            };
+        }
+        let extent = bounds.extent().max_element().max(1e-4);
+        let size = extent * resolution as f32 / (resolution as f32 - 2.0).max(1.0);
+        VoxelGrid {
+            origin: bounds.center() - Vec3::splat(size * 0.5),
+            size,
+            resolution,
+        }
+    }
+    pub fn voxel_size(&self) -> f32 {
+        self.size / self.resolution as f32
+    }
+    /// Texels per side of the directional volumes' base level (half the grid, rounded up).
+    pub fn aniso_resolution(&self) -> u32 {
+        self.resolution.div_ceil(2)
+    }
+    /// Mip levels of the directional volumes (their base level down to 1 texel).
+    pub fn mip_levels(&self) -> u32 {
+        32 - self.aniso_resolution().leading_zeros()
+    }
+}
+
+/// Diffuse cones over the hemisphere around +Z: direction and weight, weights summing to pi
+/// (cosine-weighted solid angle). One cone along the normal covers the cap of the cone's half
+/// aperture; the rest share the band below it, tilted to the band's cosine-weighted mean angle.
+/// With 6 cones of 60 degrees this gives the paper's weights (pi/4 and 3pi/20).
+pub fn cone_set(count: u32, aperture_deg: f32, paper: bool) -> Vec<Vec4> {
+    let count = count.clamp(1, 16);
+    let pi = std::f32::consts::PI;
+    if paper {
+        // The original's directions: the ring offset (0.866) is added to the normal, so the cones
+        // tilt ~40.9 degrees, not the intended 60.
+        let mut cones = vec![Vec4::new(0.0, 0.0, 1.0, pi / 4.0)];
+        for k in 0..5 {
+            let phi = k as f32 * 2.0 * pi / 5.0;
+            let d = Vec3::new(0.866 * phi.cos(), 0.866 * phi.sin(), 1.0).normalize();
+            cones.push(d.extend(3.0 * pi / 20.0));
+        }
+        return cones;
+    }
+    if count == 1 {
+        return vec![Vec4::new(0.0, 0.0, 1.0, pi)];
+    }
+    let beta = (aperture_deg.to_radians() * 0.5).clamp(0.01, 1.5);
+    let cap = pi * beta.sin().powi(2);
+    let ring_total = pi - cap;
+    // Cosine-weighted mean polar angle over the band [beta, pi/2]: integrate numerically.
+    let (mut num, mut den) = (0.0f64, 0.0f64);
+    let steps = 512;
+    for i in 0..steps {
+        let t = beta as f64
+            + (std::f64::consts::FRAC_PI_2 - beta as f64) * (i as f64 + 0.5) / steps as f64;
+        let w = t.cos() * t.sin();
+        num += t * w;
+        den += w;
+    }
+    let tilt = (num / den) as f32;
+    let ring = count - 1;
+    let mut cones = vec![Vec4::new(0.0, 0.0, 1.0, cap)];
+    for k in 0..ring {
+        let phi = k as f32 * 2.0 * pi / ring as f32;
+        let d = Vec3::new(tilt.sin() * phi.cos(), tilt.sin() * phi.sin(), tilt.cos());
+        cones.push(d.extend(ring_total / ring as f32));
+    }
+    cones
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cone_weights_sum_to_pi_and_match_the_paper() {
+        for n in 1..=16 {
+            let s: f32 = cone_set(n, 60.0, false).iter().map(|c| c.w).sum();
+            assert!(
+                (s - std::f32::consts::PI).abs() < 1e-4,
+                "{n} cones sum to {s}"
+            );
+        }
+        let six = cone_set(6, 60.0, false);
+        assert!((six[0].w - std::f32::consts::PI / 4.0).abs() < 1e-5);
+        assert!((six[1].w - 3.0 * std::f32::consts::PI / 20.0).abs() < 1e-5);
+        let paper: f32 = cone_set(6, 60.0, true).iter().map(|c| c.w).sum();
+        assert!((paper - std::f32::consts::PI).abs() < 1e-5);
+    }
+
+    #[test]
+    fn grid_holds_the_bounds_with_a_margin() {
+        let b = Aabb {
+            min: Vec3::new(-1.0, 0.0, -2.0),
+            max: Vec3::new(1.0, 3.0, 2.0),
+        };
+        let g = VoxelGrid::fit(&b, 64);
+        assert!(g.origin.cmple(b.min - g.voxel_size() * 0.99).all());
+        assert!((g.origin + g.size)
+            .cmpge(b.max + g.voxel_size() * 0.99)
+            .all());
+        assert_eq!(VoxelGrid::fit(&b, 8).mip_levels(), 3); // 4, 2, 1
+        assert_eq!(VoxelGrid::fit(&b, 37).mip_levels(), 5); // 19, 9, 4, 2, 1
+    }
+}
+
+use crate::render::pipelines::{DescriptorPool, SetLayout};
+use crate::render::GpuScene;
+use crate::vk::{vk, Context, Graph, Image, VkResult};
+use std::sync::Arc;
+
+/// Bits of frame.grid_info.w (glsl/common.glsl).
+pub const FLAG_DYNAMIC: u32 = 1;
+pub const FLAG_EMISSIVE: u32 = 2;
+pub const FLAG_VOXEL_SHADOWS: u32 = 4;
+
+/// The voxel passes a renderer runs: only those its mode and scene need.
+pub struct Gi {
+    pub settings: GiSettings,
+    pub volumes: Volumes,
+    pub voxelizer: Voxelizer,
+    /// Inject and mips: absent when the mode only shows the voxels' materials.
+    pub lighting: Option<(Inject, Mip)>,
+    pub bounce: Option<Bounce>,
+    pub trace: Trace,
+    pub cones: Vec<Vec4>,
+    pub emissive: bool,
+    pub dynamic: bool,
+    /// Scale of the emission sums (fixed point per unit radiance).
+    pub emission_scale: f32,
+    /// Static geometry must be voxelized (first frame, or a static node moved).
+    pub static_dirty: bool,
+    _pool: DescriptorPool,
+}
+
+/// What `Gi::new` needs from the renderer.
+pub struct GiInputs<'a> {
+    pub scene_layout: &'a SetLayout,
+    pub material_layout: &'a SetLayout,
+    pub shadow_map: (vk::ImageView, vk::Sampler),
+    pub gbuffer: Vec<(vk::ImageView, vk::Sampler)>,
+    pub out: &'a Image,
+}
+
+impl Gi {
+    pub fn new(
+        ctx: &Arc<Context>,
+        scene: &crate::scene::Scene,
+        settings: &GiSettings,
+        light_voxels: bool,
+        dynamic: bool,
+        inputs: GiInputs,
+    ) -> VkResult<Gi> {
+        let grid = VoxelGrid::fit(&scene.bounds, settings.voxels);
+        let max_emission = scene
+            .materials
+            .iter()
+            .map(|m| m.emissive.max_element())
+            .fold(0.0f32, f32::max);
+        let emissive = max_emission > 0.0;
+        let volumes = Volumes::new(ctx, grid, settings, emissive, dynamic)?;
+        let pool = DescriptorPool::new(
+            ctx,
+            &[
+                vk::DescriptorPoolSize {
+                    ty: vk::DescriptorType::STORAGE_BUFFER,
+                    descriptor_count: 64,
+                },
+                vk::DescriptorPoolSize {
+                    ty: vk::DescriptorType::STORAGE_IMAGE,
+                    descriptor_count: 32 + 12 * grid.mip_levels(),
+                },
+                vk::DescriptorPoolSize {
+                    ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+                    descriptor_count: 64,
+                },
+            ],
+            16 + grid.mip_levels(),
+        )?;
+        let paper = settings.paper;
+        let voxelizer = Voxelizer::new(
+            ctx,
+            &pool,
+            &volumes,
+            inputs.scene_layout,
+            inputs.material_layout,
+            paper,
+        )?;
+        let lighting = if light_voxels {
+            Some((
+                Inject::new(
+                    ctx,
+                    &pool,
+                    &volumes,
+                    inputs.scene_layout,
+                    inputs.shadow_map,
+                    paper,
+                )?,
+                Mip::new(ctx, &pool, &volumes, paper)?,
+            ))
+        } else {
+            None
+        };
+        let bounce = if light_voxels && settings.bounces >= 2 {
+            Some(Bounce::new(
+                ctx,
+                &pool,
+                &volumes,
+                inputs.scene_layout,
+                paper,
+            )?)
+        } else {
+            None
+        };
+        let trace = Trace::new(
+            ctx,
+            &pool,
+            &volumes,
+            inputs.scene_layout,
+            &inputs.gbuffer,
+            inputs.out,
+            paper,
+        )?;
+        Ok(Gi {
+            cones: cone_set(settings.cone_count, settings.cone_aperture_deg, paper),
+            settings: settings.clone(),
+            volumes,
+            voxelizer,
+            lighting,
+            bounce,
+            trace,
+            emissive,
+            dynamic,
+            emission_scale: 4096.0 / max_emission.max(1e-6),
+            static_dirty: true,
+            _pool: pool,
+        })
+    }
+
+    pub fn flags(&self) -> u32 {
+        (if self.dynamic { FLAG_DYNAMIC } else { 0 })
+            | (if self.emissive { FLAG_EMISSIVE } else { 0 })
+            | (if self.settings.voxel_shadows {
+                FLAG_VOXEL_SHADOWS
+            } else {
+                0
+            })
+    }
+
+    /// Records the voxel passes up to the lit, mipmapped volumes (the trace is separate).
+    pub fn record_volumes(
+        &self,
+        ctx: &Context,
+        g: &mut Graph,
+        gpu: &GpuScene,
+        scene_set: vk::DescriptorSet,
+        shadow_map: &Image,
+        draw_static: &dyn Fn(vk::CommandBuffer, &crate::render::pipelines::Pipeline, u32),
+        draw_dynamic: &dyn Fn(vk::CommandBuffer, &crate::render::pipelines::Pipeline, u32),
+    ) {
+        if self.static_dirty {
+            self.voxelizer
+                .record(ctx, g, &self.volumes, gpu, false, draw_static);
+        }
+        if self.dynamic {
+            self.voxelizer
+                .record(ctx, g, &self.volumes, gpu, true, draw_dynamic);
+        }
+        if let Some((inject, mip)) = &self.lighting {
+            inject.record(ctx, g, &self.volumes, scene_set, shadow_map);
+            mip.record(ctx, g, &self.volumes, "");
+            if let Some(b) = &self.bounce {
+                b.record(ctx, g, &self.volumes, scene_set);
+                mip.record(ctx, g, &self.volumes, " (bounce)");
+            }
+        }
+    }
+
+    /// Passes this renderer runs, for `voxgi info`.
+    pub fn passes(&self) -> Vec<&'static str> {
+        let mut p = vec!["voxelize static"];
+        if self.dynamic {
+            p.extend(["clear dynamic", "voxelize dynamic"]);
+        }
+        if self.lighting.is_some() {
+            p.extend(["inject", "mip base", "mip volume"]);
+        }
+        if self.bounce.is_some() {
+            p.extend(["bounce", "mip base (bounce)", "mip volume (bounce)"]);
+        }
+        p
+    }
+}

@@ -1,0 +1,184 @@
+//! The GPU memory of the voxel passes: only what the scene and the settings need.
+
+use super::{GiSettings, VoxelGrid};
+use crate::vk::{vk, Buffer, Context, Image, ImageDesc, Sampler, VkResult};
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+/// uints per voxel of the default accumulators (glsl/voxel_common.glsl).
+pub const ACCUM_STRIDE: u64 = 10;
+pub const EMISSION_STRIDE: u64 = 3;
+
+/// What voxelization writes, per mode.
+pub enum VoxelData {
+    /// Fixed-point sums and counts: static pass, and dynamic pass when there is dynamic geometry.
+    Sums {
+        static_accum: Buffer,
+        static_emission: Option<Buffer>,
+        dynamic_accum: Option<Buffer>,
+        dynamic_emission: Option<Buffer>,
+    },
+    /// The paper's RGBA8 moving averages (as r32ui), and its static flag volume.
+    Paper {
+        albedo: Image,
+        normal: Image,
+        emission: Option<Image>,
+        flag: Option<Image>,
+    },
+}
+
+/// Name and bytes of one volume, for `voxgi info`.
+#[derive(Clone, Debug)]
+pub struct VolumeInfo {
+    pub name: String,
+    pub bytes: u64,
+}
+
+pub struct Volumes {
+    pub grid: VoxelGrid,
+    pub data: VoxelData,
+    /// Outgoing radiance per voxel, premultiplied by opacity (RGBA16F; RGBA8 for --paper).
+    pub radiance: Image,
+    /// The six directional volumes (-X, +X, -Y, +Y, -Z, +Z) with full mip chains.
+    pub faces: Vec<Image>,
+    /// Trilinear, transparent black outside the grid.
+    pub sampler: Sampler,
+    /// Stand-in for bindings a mode leaves unused.
+    pub dummy: Buffer,
+    pub info: Vec<VolumeInfo>,
+}
+
+impl Volumes {
+    pub fn new(
+        ctx: &Arc<Context>,
+        grid: VoxelGrid,
+        settings: &GiSettings,
+        emissive: bool,
+        dynamic: bool,
+    ) -> VkResult<Volumes> {
+        let n = grid.resolution;
+        let voxels = (n as u64).pow(3);
+        let mut info = Vec::new();
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+        let mut buffer = |name: &str, stride: u64| -> VkResult<Buffer> {
+            info.push(VolumeInfo {
+                name: name.into(),
+                bytes: voxels * stride * 4,
+            });
+            Buffer::new(
+                ctx,
+                name,
+                voxels * stride * 4,
+                storage,
+                MemoryLocation::GpuOnly,
+            )
+        };
+        let u32_volume = |name: &str| {
+            Image::new(
+                ctx,
+                name,
+                ImageDesc::d3(
+                    vk::Format::R32_UINT,
+                    n,
+                    vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST,
+                ),
+            )
+        };
+        let data = if settings.paper {
+            let mut paper_info = vec![
+                ("voxel albedo (RGBA8 as r32ui)", true),
+                ("voxel normal (RGBA8 as r32ui)", true),
+            ];
+            paper_info.push(("voxel emission (RGBA8 as r32ui)", emissive));
+            paper_info.push(("static flags", dynamic));
+            for (name, used) in paper_info {
+                if used {
+                    info.push(VolumeInfo {
+                        name: name.into(),
+                        bytes: voxels * 4,
+                    });
+                }
+            }
+            VoxelData::Paper {
+                albedo: u32_volume("voxel albedo")?,
+                normal: u32_volume("voxel normal")?,
+                emission: emissive.then(|| u32_volume("voxel emission")).transpose()?,
+                flag: dynamic.then(|| u32_volume("static flags")).transpose()?,
+            }
+        } else {
+            VoxelData::Sums {
+                static_accum: buffer("static voxel sums", ACCUM_STRIDE)?,
+                static_emission: emissive
+                    .then(|| buffer("static emission sums", EMISSION_STRIDE))
+                    .transpose()?,
+                dynamic_accum: dynamic
+                    .then(|| buffer("dynamic voxel sums", ACCUM_STRIDE))
+                    .transpose()?,
+                dynamic_emission: (dynamic && emissive)
+                    .then(|| buffer("dynamic emission sums", EMISSION_STRIDE))
+                    .transpose()?,
+            }
+        };
+
+        let (format, texel) = if settings.paper {
+            (vk::Format::R8G8B8A8_UNORM, 4)
+        } else {
+            (vk::Format::R16G16B16A16_SFLOAT, 8)
+        };
+        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED;
+        let radiance = Image::new(ctx, "voxel radiance", ImageDesc::d3(format, n, usage))?;
+        info.push(VolumeInfo {
+            name: format!("voxel radiance ({format:?})"),
+            bytes: voxels * texel,
+        });
+        let m = grid.aniso_resolution();
+        let levels = grid.mip_levels();
+        let names = ["-X", "+X", "-Y", "+Y", "-Z", "+Z"];
+        let faces = names
+            .iter()
+            .map(|f| {
+                Image::new(
+                    ctx,
+                    &format!("directional volume {f}"),
+                    ImageDesc::d3(format, m, usage).mips(levels),
+                )
+            })
+            .collect::<VkResult<Vec<_>>>()?;
+        let mut face_bytes = 0u64;
+        for l in 0..levels {
+            face_bytes += ((m >> l).max(1) as u64).pow(3) * texel;
+        }
+        info.push(VolumeInfo {
+            name: format!("6 directional volumes, {m}^3 with {levels} mips"),
+            bytes: 6 * face_bytes,
+        });
+        let sampler = Sampler::new(
+            ctx,
+            &vk::SamplerCreateInfo::default()
+                .mag_filter(vk::Filter::LINEAR)
+                .min_filter(vk::Filter::LINEAR)
+                .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+                .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_BORDER)
+                .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_BORDER)
+                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_BORDER)
+                .border_color(vk::BorderColor::FLOAT_TRANSPARENT_BLACK)
+                .max_lod(vk::LOD_CLAMP_NONE),
+        )?;
+        let dummy = Buffer::new(
+            ctx,
+            "unused binding",
+            16,
+            vk::BufferUsageFlags::STORAGE_BUFFER,
+            MemoryLocation::GpuOnly,
+        )?;
+        Ok(Volumes {
+            grid,
+            data,
+            radiance,
+            faces,
+            sampler,
+            dummy,
+            info,
+        })
+    }
+}

@@ -1,0 +1,365 @@
+//! Step 1: voxelization. Static geometry is voxelized once (again when a static node moves);
+//! dynamic geometry is cleared and voxelized every frame while static voxels stay.
+
+use super::volumes::{Volumes, VoxelData};
+use crate::render::pipelines::{
+    self, Desc, DescriptorPool, GraphicsDesc, Pipeline, Set, SetLayout, Spec,
+};
+use crate::render::GpuScene;
+use crate::vk::{vk, Access, Context, Graph, VkResult};
+use std::sync::Arc;
+
+/// Push-constant flag: the static pass (the paper's pass writes its flag volume then).
+pub const STATIC_PASS: u32 = 2;
+
+pub struct Voxelizer {
+    pub pipeline: Pipeline,
+    static_target: Set,
+    dynamic_target: Option<Set>,
+    /// PAPER: zeroes the dynamic voxels (where the flag is 0).
+    clear_dynamic: Option<(Pipeline, Set)>,
+}
+
+impl Voxelizer {
+    pub fn new(
+        ctx: &Arc<Context>,
+        pool: &DescriptorPool,
+        volumes: &Volumes,
+        scene_layout: &SetLayout,
+        material_layout: &SetLayout,
+        paper: bool,
+    ) -> VkResult<Voxelizer> {
+        let frag = vk::ShaderStageFlags::FRAGMENT;
+        let (static_target, dynamic_target, clear_dynamic) = match &volumes.data {
+            VoxelData::Sums {
+                static_accum,
+                static_emission,
+                dynamic_accum,
+                dynamic_emission,
+            } => {
+                let target = |accum, emission: &Option<crate::vk::Buffer>| {
+                    pool.set(
+                        frag,
+                        &[
+                            (0, Desc::Storage(accum)),
+                            (
+                                1,
+                                Desc::Storage(emission.as_ref().unwrap_or(&volumes.dummy)),
+                            ),
+                        ],
+                    )
+                };
+                let s = target(static_accum, static_emission)?;
+                let d = dynamic_accum
+                    .as_ref()
+                    .map(|a| target(a, dynamic_emission))
+                    .transpose()?;
+                (s, d, None)
+            }
+            VoxelData::Paper {
+                albedo,
+                normal,
+                emission,
+                flag,
+            } => {
+                let img = |i: &crate::vk::Image| Desc::StorageImage(i.view);
+                let s = pool.set(
+                    frag,
+                    &[
+                        (0, img(albedo)),
+                        (1, img(normal)),
+                        (2, img(emission.as_ref().unwrap_or(albedo))),
+                        (3, img(flag.as_ref().unwrap_or(albedo))),
+                    ],
+                )?;
+                let clear = match flag {
+                    Some(flag) => {
+                        let comp = vk::ShaderStageFlags::COMPUTE;
+                        let set = pool.set(
+                            comp,
+                            &[
+                                (0, img(albedo)),
+                                (1, img(normal)),
+                                (2, img(emission.as_ref().unwrap_or(albedo))),
+                                (3, img(flag)),
+                            ],
+                        )?;
+                        let p = pipelines::compute(
+                            ctx,
+                            "clear_dynamic.comp",
+                            &[&set.layout],
+                            0,
+                            &Spec(vec![]),
+                        )?;
+                        Some((p, set))
+                    }
+                    None => None,
+                };
+                (s, None, clear)
+            }
+        };
+        let variant = if paper {
+            "voxelize.frag:PAPER"
+        } else {
+            "voxelize.frag"
+        };
+        let pipeline = pipelines::graphics(
+            ctx,
+            &GraphicsDesc {
+                name: "voxelize",
+                shaders: &[
+                    (vk::ShaderStageFlags::VERTEX, "voxelize.vert"),
+                    (vk::ShaderStageFlags::GEOMETRY, "voxelize.geom"),
+                    (vk::ShaderStageFlags::FRAGMENT, variant),
+                ],
+                sets: &[scene_layout, material_layout, &static_target.layout],
+                push_size: crate::render::DRAW_PUSH_SIZE,
+                spec: Spec(vec![]),
+                vertex_input: &[0, 1, 2],
+                color_formats: &[],
+                depth_format: None,
+                depth_bias: None,
+                cull: vk::CullModeFlags::NONE,
+            },
+        )?;
+        Ok(Voxelizer {
+            pipeline,
+            static_target,
+            dynamic_target,
+            clear_dynamic,
+        })
+    }
+
+    /// Accesses of the voxel data by a pass that writes it from the fragment stage.
+    fn declare<'g, 'a, 'r>(
+        pass: crate::vk::graph::PassBuilder<'g, 'a, 'r>,
+        volumes: &'r Volumes,
+        dynamic: bool,
+        access: Access,
+    ) -> crate::vk::graph::PassBuilder<'g, 'a, 'r> {
+        let mut pass = pass;
+        match &volumes.data {
+            VoxelData::Sums {
+                static_accum,
+                static_emission,
+                dynamic_accum,
+                dynamic_emission,
+            } => {
+                let (a, e) = if dynamic {
+                    (dynamic_accum.as_ref(), dynamic_emission.as_ref())
+                } else {
+                    (Some(static_accum), static_emission.as_ref())
+                };
+                for b in a.into_iter().chain(e) {
+                    pass = pass.buffer(b, access);
+                }
+            }
+            VoxelData::Paper {
+                albedo,
+                normal,
+                emission,
+                flag,
+            } => {
+                for i in [Some(albedo), Some(normal), emission.as_ref(), flag.as_ref()]
+                    .into_iter()
+                    .flatten()
+                {
+                    pass = pass.image(i, access);
+                }
+            }
+        }
+        pass
+    }
+
+    /// Clears and voxelizes the static (or, with `dynamic`, the dynamic) geometry. `draw` binds
+    /// the scene and material sets and draws the instances of that kind with the given flags.
+    pub fn record(
+        &self,
+        ctx: &Context,
+        g: &mut Graph,
+        volumes: &Volumes,
+        gpu: &GpuScene,
+        dynamic: bool,
+        draw: &dyn Fn(vk::CommandBuffer, &Pipeline, u32),
+    ) {
+        let d = &ctx.device;
+        let n = volumes.grid.resolution;
+        // Clear what this pass rebuilds.
+        let clear_name = if dynamic {
+            "clear dynamic"
+        } else {
+            "clear static"
+        };
+        match (&volumes.data, dynamic, &self.clear_dynamic) {
+            (
+                VoxelData::Paper {
+                    albedo,
+                    normal,
+                    emission,
+                    flag,
+                },
+                true,
+                Some((p, set)),
+            ) => {
+                let mut pass = g.pass(clear_name);
+                for i in [Some(albedo), Some(normal), emission.as_ref()]
+                    .into_iter()
+                    .flatten()
+                {
+                    pass = pass.image(i, Access::ComputeStorageReadWrite);
+                }
+                if let Some(f) = flag {
+                    pass = pass.image(f, Access::ComputeStorageRead);
+                }
+                pass.record(|cmd| unsafe {
+                    d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, p.raw);
+                    d.cmd_bind_descriptor_sets(
+                        cmd,
+                        vk::PipelineBindPoint::COMPUTE,
+                        p.layout,
+                        0,
+                        &[set.raw],
+                        &[],
+                    );
+                    let groups = n.div_ceil(4);
+                    d.cmd_dispatch(cmd, groups, groups, groups);
+                });
+            }
+            (
+                VoxelData::Paper {
+                    albedo,
+                    normal,
+                    emission,
+                    flag,
+                },
+                false,
+                _,
+            ) => {
+                let mut pass = g.pass(clear_name);
+                let images: Vec<_> = [Some(albedo), Some(normal), emission.as_ref(), flag.as_ref()]
+                    .into_iter()
+                    .flatten()
+                    .collect();
+                for i in &images {
+                    pass = pass.image(i, Access::TransferWrite);
+                }
+                pass.record(|cmd| unsafe {
+                    for i in &images {
+                        d.cmd_clear_color_image(
+                            cmd,
+                            i.raw,
+                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                            &vk::ClearColorValue { uint32: [0; 4] },
+                            &[i.full_range()],
+                        );
+                    }
+                });
+            }
+            (VoxelData::Sums { .. }, _, _) => {
+                let pass =
+                    Self::declare(g.pass(clear_name), volumes, dynamic, Access::TransferWrite);
+                let buffers: Vec<vk::Buffer> = match &volumes.data {
+                    VoxelData::Sums {
+                        static_accum,
+                        static_emission,
+                        dynamic_accum,
+                        dynamic_emission,
+                    } => {
+                        if dynamic {
+                            dynamic_accum
+                                .iter()
+                                .chain(dynamic_emission)
+                                .map(|b| b.raw)
+                                .collect()
+                        } else {
+                            std::iter::once(static_accum)
+                                .chain(static_emission)
+                                .map(|b| b.raw)
+                                .collect()
+                        }
+                    }
+                    _ => vec![],
+                };
+                pass.record(|cmd| unsafe {
+                    for b in &buffers {
+                        d.cmd_fill_buffer(cmd, *b, 0, vk::WHOLE_SIZE, 0);
+                    }
+                });
+            }
+            _ => {}
+        }
+
+        let name = if dynamic {
+            "voxelize dynamic"
+        } else {
+            "voxelize static"
+        };
+        let mut pass = Self::declare(
+            g.pass(name),
+            volumes,
+            dynamic,
+            Access::FragmentStorageReadWrite,
+        )
+        .buffer(&gpu.vertices, Access::VertexBuffer)
+        .buffer(&gpu.indices, Access::IndexBuffer);
+        for t in &gpu.textures {
+            pass = pass.image(t, Access::FragmentSampled);
+        }
+        // The paper's dynamic pass reads the static flags.
+        if let (VoxelData::Paper { flag: Some(f), .. }, true) = (&volumes.data, dynamic) {
+            pass = pass.image(f, Access::FragmentStorageReadWrite);
+        }
+        let target = if dynamic {
+            self.dynamic_target.as_ref().unwrap_or(&self.static_target)
+        } else {
+            &self.static_target
+        };
+        pass.record(|cmd| unsafe {
+            let info = vk::RenderingInfo::default()
+                .render_area(vk::Rect2D {
+                    offset: vk::Offset2D { x: 0, y: 0 },
+                    extent: vk::Extent2D {
+                        width: n,
+                        height: n,
+                    },
+                })
+                .layer_count(1);
+            d.cmd_begin_rendering(cmd, &info);
+            // A plain viewport: the geometry shader already maps voxels to pixels.
+            d.cmd_set_viewport(
+                cmd,
+                0,
+                &[vk::Viewport {
+                    x: 0.0,
+                    y: 0.0,
+                    width: n as f32,
+                    height: n as f32,
+                    min_depth: 0.0,
+                    max_depth: 1.0,
+                }],
+            );
+            d.cmd_set_scissor(
+                cmd,
+                0,
+                &[vk::Rect2D {
+                    offset: vk::Offset2D { x: 0, y: 0 },
+                    extent: vk::Extent2D {
+                        width: n,
+                        height: n,
+                    },
+                }],
+            );
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline.raw);
+            d.cmd_bind_descriptor_sets(
+                cmd,
+                vk::PipelineBindPoint::GRAPHICS,
+                self.pipeline.layout,
+                2,
+                &[target.raw],
+                &[],
+            );
+            draw(cmd, &self.pipeline, if dynamic { 0 } else { STATIC_PASS });
+            d.cmd_end_rendering(cmd);
+        });
+    }
+}
