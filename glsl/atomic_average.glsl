@@ -16,16 +16,18 @@ uint pack_rgba8(vec4 v) {
          | ((uint(v.w) & 0xFFu) << 24u);
 }
 
-// GLSL cannot pass images to functions, so the average is stamped out per image:
-// RGBA8_AVG(name, image) defines `void name(ivec3 coords, vec4 value)`.
+// GLSL cannot pass buffers to functions, so the average is stamped out per volume:
+// RGBA8_AVG(name, array) defines `void name(uint voxel, vec4 value)`. Each voxel is one 32-bit
+// word, the bits of an RGBA8 texel seen through an r32ui view; it lives in a storage buffer
+// because storage-image atomics from successive draws trip synchronization validation.
 #define RGBA8_AVG(NAME, GRID)                                                              \
-void NAME(ivec3 coords, vec4 value) {                                                      \
+void NAME(uint voxel, vec4 value) {                                                        \
     value.rgb *= 255.0;                                                                    \
     uint new_value = pack_rgba8(vec4(value.rgb, 1.0));                                     \
     uint prev = 0u;                                                                        \
     uint cur;                                                                              \
     int iterations = 0;                                                                    \
-    while ((cur = imageAtomicCompSwap(GRID, coords, prev, new_value)) != prev              \
+    while ((cur = atomicCompSwap(GRID[voxel], prev, new_value)) != prev                     \
            && iterations < 255) {                                                          \
         prev = cur;                                                                        \
         vec4 rval = unpack_rgba8(cur);                                                     \

@@ -16,21 +16,22 @@ struct Voxel {
 };
 
 #ifdef PAPER
-layout(set = VOXEL_SET, binding = 0, r32ui) uniform readonly uimage3D albedo_grid;
-layout(set = VOXEL_SET, binding = 1, r32ui) uniform readonly uimage3D normal_grid;
-layout(set = VOXEL_SET, binding = 2, r32ui) uniform readonly uimage3D emission_grid;
+layout(set = VOXEL_SET, binding = 0, std430) readonly buffer AlbedoGrid { uint albedo_grid[]; };
+layout(set = VOXEL_SET, binding = 1, std430) readonly buffer NormalGrid { uint normal_grid[]; };
+layout(set = VOXEL_SET, binding = 2, std430) readonly buffer EmissionGrid { uint emission_grid[]; };
 
 Voxel load_voxel(ivec3 c) {
     Voxel v;
-    vec4 a = unpack_rgba8(imageLoad(albedo_grid, c).r);
+    uint i = voxel_index(c);
+    vec4 a = unpack_rgba8(albedo_grid[i]);
     v.filled = a.a > 0.0;
     v.albedo = a.rgb / 255.0;
-    vec3 n = unpack_rgba8(imageLoad(normal_grid, c).r).rgb / 255.0 * 2.0 - 1.0;
+    vec3 n = unpack_rgba8(normal_grid[i]).rgb / 255.0 * 2.0 - 1.0;
     v.agreement = length(n);
     v.normal = v.agreement > 0.0 ? n / v.agreement : vec3(0.0);
     v.axis_weights = v.normal * v.normal;
     v.emission = (frame.grid_info.w & FLAG_EMISSIVE) != 0u
-        ? unpack_rgba8(imageLoad(emission_grid, c).r).rgb / 255.0 : vec3(0.0);
+        ? unpack_rgba8(emission_grid[i]).rgb / 255.0 : vec3(0.0);
     return v;
 }
 #else

@@ -4,7 +4,7 @@
 // emission into its voxel. The default path sums fixed-point values with a 32-bit count
 // (atomicAdd), writes every voxel the triangle crosses within the pixel's column (so a closed mesh
 // stays watertight), and keeps emission HDR. PAPER: the original imageAtomicRGBA8Avg into RGBA8
-// volumes through r32ui views, one voxel per fragment, normals encoded n * 0.5 + 0.5.
+// words (RGBA8 texels as r32ui), one voxel per fragment, normals encoded n * 0.5 + 0.5.
 #include "common.glsl"
 #include "material.glsl"
 #include "voxel_common.glsl"
@@ -19,15 +19,17 @@ layout(location = 0) in vec3 g_normal;
 layout(location = 1) in vec2 g_uv;
 layout(location = 2) flat in vec4 g_aabb;
 layout(location = 3) flat in vec4 g_plane;
+#ifndef PAPER
 layout(location = 4) flat in vec2 g_depth;
+#endif
 layout(location = 5) flat in int g_axis;
 
 #ifdef PAPER
 #include "atomic_average.glsl"
-layout(set = 2, binding = 0, r32ui) uniform coherent volatile uimage3D albedo_grid;
-layout(set = 2, binding = 1, r32ui) uniform coherent volatile uimage3D normal_grid;
-layout(set = 2, binding = 2, r32ui) uniform coherent volatile uimage3D emission_grid;
-layout(set = 2, binding = 3, r32ui) uniform uimage3D static_flag;
+layout(set = 2, binding = 0, std430) coherent buffer AlbedoGrid { uint albedo_grid[]; };
+layout(set = 2, binding = 1, std430) coherent buffer NormalGrid { uint normal_grid[]; };
+layout(set = 2, binding = 2, std430) coherent buffer EmissionGrid { uint emission_grid[]; };
+layout(set = 2, binding = 3, std430) buffer StaticFlag { uint static_flag[]; };
 RGBA8_AVG(average_albedo, albedo_grid)
 RGBA8_AVG(average_normal, normal_grid)
 RGBA8_AVG(average_emission, emission_grid)
@@ -56,18 +58,18 @@ void main() {
 #ifdef PAPER
     ivec3 c = unswizzle(ivec3(ivec2(px), int(depth)));
     if (!in_grid(c)) return;  // dilated triangles reach -1 and N: no-ops in GL, UB in Vulkan
+    uint voxel = voxel_index(c);
     bool static_pass = (draw.flags & 2u) != 0u;
-    if (!static_pass && (frame.grid_info.w & FLAG_DYNAMIC) != 0u
-        && imageLoad(static_flag, c).r != 0u) {
+    if (!static_pass && (frame.grid_info.w & FLAG_DYNAMIC) != 0u && static_flag[voxel] != 0u) {
         return;  // the paper hides dynamic geometry inside static voxels
     }
-    average_albedo(c, vec4(base.rgb, 1.0));
-    average_normal(c, vec4(normal * 0.5 + 0.5, 1.0));
+    average_albedo(voxel, vec4(base.rgb, 1.0));
+    average_normal(voxel, vec4(normal * 0.5 + 0.5, 1.0));
     if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u) {
-        average_emission(c, vec4(emission, 1.0));
+        average_emission(voxel, vec4(emission, 1.0));
     }
     if (static_pass && (frame.grid_info.w & FLAG_DYNAMIC) != 0u) {
-        imageStore(static_flag, c, uvec4(1u));
+        atomicOr(static_flag[voxel], 1u);  // atomic: draws write it without barriers between
     }
 #else
     // Every voxel of this column the triangle's plane crosses within the pixel, clamped to the

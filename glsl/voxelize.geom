@@ -1,4 +1,5 @@
 #version 450
+// variants: PAPER
 // Voxelization, step 1 of the paper: conservative rasterization in the geometry shader
 // (Hasselgren et al., GPU Gems 2 ch. 42). Each triangle is projected along the axis where its
 // area is largest, its edges are pushed out by half a voxel so that every voxel it touches gets a
@@ -17,7 +18,9 @@ layout(location = 0) out vec3 g_normal;
 layout(location = 1) out vec2 g_uv;
 layout(location = 2) flat out vec4 g_aabb;      // pixel-space bounds grown by half a voxel
 layout(location = 3) flat out vec4 g_plane;     // depth = x * px + y * py + z (voxel units)
+#ifndef PAPER
 layout(location = 4) flat out vec2 g_depth;     // the triangle's depth range
+#endif
 layout(location = 5) flat out int g_axis;       // 0: project along X, 1: Y, 2: Z
 
 // (u, v, depth) for a projection along `axis`, in voxel units.
@@ -79,7 +82,9 @@ void main() {
         g_uv = b0 * v_uv[i0] + b1 * v_uv[i1] + b2 * v_uv[i2];
         g_aabb = vec4(lo, hi);
         g_plane = vec4(plane, 0.0);
+#ifndef PAPER
         g_depth = vec2(dlo, dhi);
+#endif
         g_axis = axis;
         gl_Position = vec4(v / n * 2.0 - 1.0, 0.5, 1.0);
         EmitVertex();

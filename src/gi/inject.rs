@@ -15,14 +15,14 @@ pub fn voxel_data_descs<'a>(volumes: &'a Volumes) -> Vec<(u32, Desc<'a>)> {
             dynamic_accum,
             dynamic_emission,
         } => {
-            let or_dummy = |b: &'a Option<crate::vk::Buffer>| {
-                Desc::Storage(b.as_ref().unwrap_or(&volumes.dummy))
+            let or_dummy = |b: &'a Option<crate::vk::Buffer>, i: usize| {
+                Desc::Storage(b.as_ref().unwrap_or(&volumes.dummies[i]))
             };
             vec![
                 (0, Desc::Storage(static_accum)),
-                (1, or_dummy(static_emission)),
-                (2, or_dummy(dynamic_accum)),
-                (3, or_dummy(dynamic_emission)),
+                (1, or_dummy(static_emission, 1)),
+                (2, or_dummy(dynamic_accum, 2)),
+                (3, or_dummy(dynamic_emission, 3)),
             ]
         }
         VoxelData::Paper {
@@ -31,11 +31,11 @@ pub fn voxel_data_descs<'a>(volumes: &'a Volumes) -> Vec<(u32, Desc<'a>)> {
             emission,
             ..
         } => vec![
-            (0, Desc::StorageImage(albedo.view)),
-            (1, Desc::StorageImage(normal.view)),
+            (0, Desc::Storage(albedo)),
+            (1, Desc::Storage(normal)),
             (
                 2,
-                Desc::StorageImage(emission.as_ref().unwrap_or(albedo).view),
+                Desc::Storage(emission.as_ref().unwrap_or(&volumes.dummies[2])),
             ),
         ],
     }
@@ -46,6 +46,9 @@ pub fn read_voxel_data<'g, 'a, 'r>(
     mut pass: crate::vk::graph::PassBuilder<'g, 'a, 'r>,
     volumes: &'r Volumes,
 ) -> crate::vk::graph::PassBuilder<'g, 'a, 'r> {
+    for d in &volumes.dummies {
+        pass = pass.buffer(d, Access::ComputeStorageRead);
+    }
     match &volumes.data {
         VoxelData::Sums {
             static_accum,
@@ -67,8 +70,8 @@ pub fn read_voxel_data<'g, 'a, 'r>(
             emission,
             ..
         } => {
-            for i in std::iter::once(albedo).chain([normal]).chain(emission) {
-                pass = pass.image(i, Access::ComputeStorageRead);
+            for b in std::iter::once(albedo).chain([normal]).chain(emission) {
+                pass = pass.buffer(b, Access::ComputeStorageRead);
             }
         }
     }

@@ -5,14 +5,20 @@
 mod bounce;
 mod inject;
 mod mip;
+mod readback;
 mod trace;
 mod volumes;
 mod voxelize;
 
+pub use readback::VoxelDump;
 pub use volumes::{VolumeInfo, Volumes};
 
+use crate::render::pipelines::{DescriptorPool, SetLayout};
+use crate::render::GpuScene;
 use crate::scene::Aabb;
+use crate::vk::{vk, Context, Graph, Image, VkResult};
 use glam::{Vec3, Vec4};
+use std::sync::Arc;
 
 pub use bounce::Bounce;
 pub use inject::Inject;
@@ -165,47 +171,6 @@ pub fn cone_set(count: u32, aperture_deg: f32, paper: bool) -> Vec<Vec4> {
     cones
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn cone_weights_sum_to_pi_and_match_the_paper() {
-        for n in 1..=16 {
-            let s: f32 = cone_set(n, 60.0, false).iter().map(|c| c.w).sum();
-            assert!(
-                (s - std::f32::consts::PI).abs() < 1e-4,
-                "{n} cones sum to {s}"
-            );
-        }
-        let six = cone_set(6, 60.0, false);
-        assert!((six[0].w - std::f32::consts::PI / 4.0).abs() < 1e-5);
-        assert!((six[1].w - 3.0 * std::f32::consts::PI / 20.0).abs() < 1e-5);
-        let paper: f32 = cone_set(6, 60.0, true).iter().map(|c| c.w).sum();
-        assert!((paper - std::f32::consts::PI).abs() < 1e-5);
-    }
-
-    #[test]
-    fn grid_holds_the_bounds_with_a_margin() {
-        let b = Aabb {
-            min: Vec3::new(-1.0, 0.0, -2.0),
-            max: Vec3::new(1.0, 3.0, 2.0),
-        };
-        let g = VoxelGrid::fit(&b, 64);
-        assert!(g.origin.cmple(b.min - g.voxel_size() * 0.99).all());
-        assert!((g.origin + g.size)
-            .cmpge(b.max + g.voxel_size() * 0.99)
-            .all());
-        assert_eq!(VoxelGrid::fit(&b, 8).mip_levels(), 3); // 4, 2, 1
-        assert_eq!(VoxelGrid::fit(&b, 37).mip_levels(), 5); // 19, 9, 4, 2, 1
-    }
-}
-
-use crate::render::pipelines::{DescriptorPool, SetLayout};
-use crate::render::GpuScene;
-use crate::vk::{vk, Context, Graph, Image, VkResult};
-use std::sync::Arc;
-
 /// Bits of frame.grid_info.w (glsl/common.glsl).
 pub const FLAG_DYNAMIC: u32 = 1;
 pub const FLAG_EMISSIVE: u32 = 2;
@@ -345,6 +310,7 @@ impl Gi {
     }
 
     /// Records the voxel passes up to the lit, mipmapped volumes (the trace is separate).
+    #[allow(clippy::too_many_arguments)]
     pub fn record_volumes(
         &self,
         ctx: &Context,
@@ -386,5 +352,41 @@ impl Gi {
             p.extend(["bounce", "mip base (bounce)", "mip volume (bounce)"]);
         }
         p
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cone_weights_sum_to_pi_and_match_the_paper() {
+        for n in 1..=16 {
+            let s: f32 = cone_set(n, 60.0, false).iter().map(|c| c.w).sum();
+            assert!(
+                (s - std::f32::consts::PI).abs() < 1e-4,
+                "{n} cones sum to {s}"
+            );
+        }
+        let six = cone_set(6, 60.0, false);
+        assert!((six[0].w - std::f32::consts::PI / 4.0).abs() < 1e-5);
+        assert!((six[1].w - 3.0 * std::f32::consts::PI / 20.0).abs() < 1e-5);
+        let paper: f32 = cone_set(6, 60.0, true).iter().map(|c| c.w).sum();
+        assert!((paper - std::f32::consts::PI).abs() < 1e-5);
+    }
+
+    #[test]
+    fn grid_holds_the_bounds_with_a_margin() {
+        let b = Aabb {
+            min: Vec3::new(-1.0, 0.0, -2.0),
+            max: Vec3::new(1.0, 3.0, 2.0),
+        };
+        let g = VoxelGrid::fit(&b, 64);
+        assert!(g.origin.cmple(b.min - g.voxel_size() * 0.99).all());
+        assert!((g.origin + g.size)
+            .cmpge(b.max + g.voxel_size() * 0.99)
+            .all());
+        assert_eq!(VoxelGrid::fit(&b, 8).mip_levels(), 3); // 4, 2, 1
+        assert_eq!(VoxelGrid::fit(&b, 37).mip_levels(), 5); // 19, 9, 4, 2, 1
     }
 }

@@ -18,12 +18,12 @@ pub enum VoxelData {
         dynamic_accum: Option<Buffer>,
         dynamic_emission: Option<Buffer>,
     },
-    /// The paper's RGBA8 moving averages (as r32ui), and its static flag volume.
+    /// The paper's RGBA8 moving averages (one r32ui word per voxel), and its static flags.
     Paper {
-        albedo: Image,
-        normal: Image,
-        emission: Option<Image>,
-        flag: Option<Image>,
+        albedo: Buffer,
+        normal: Buffer,
+        emission: Option<Buffer>,
+        flag: Option<Buffer>,
     },
 }
 
@@ -43,8 +43,9 @@ pub struct Volumes {
     pub faces: Vec<Image>,
     /// Trilinear, transparent black outside the grid.
     pub sampler: Sampler,
-    /// Stand-in for bindings a mode leaves unused.
-    pub dummy: Buffer,
+    /// Stand-ins for bindings a mode leaves unused, one per binding role so that no two
+    /// bindings of a pass alias the same buffer.
+    pub dummies: [Buffer; 4],
     pub info: Vec<VolumeInfo>,
 }
 
@@ -59,7 +60,10 @@ impl Volumes {
         let n = grid.resolution;
         let voxels = (n as u64).pow(3);
         let mut info = Vec::new();
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST;
+        // TRANSFER_SRC: the debug readback copies them.
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST
+            | vk::BufferUsageFlags::TRANSFER_SRC;
         let mut buffer = |name: &str, stride: u64| -> VkResult<Buffer> {
             info.push(VolumeInfo {
                 name: name.into(),
@@ -73,37 +77,14 @@ impl Volumes {
                 MemoryLocation::GpuOnly,
             )
         };
-        let u32_volume = |name: &str| {
-            Image::new(
-                ctx,
-                name,
-                ImageDesc::d3(
-                    vk::Format::R32_UINT,
-                    n,
-                    vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_DST,
-                ),
-            )
-        };
         let data = if settings.paper {
-            let mut paper_info = vec![
-                ("voxel albedo (RGBA8 as r32ui)", true),
-                ("voxel normal (RGBA8 as r32ui)", true),
-            ];
-            paper_info.push(("voxel emission (RGBA8 as r32ui)", emissive));
-            paper_info.push(("static flags", dynamic));
-            for (name, used) in paper_info {
-                if used {
-                    info.push(VolumeInfo {
-                        name: name.into(),
-                        bytes: voxels * 4,
-                    });
-                }
-            }
             VoxelData::Paper {
-                albedo: u32_volume("voxel albedo")?,
-                normal: u32_volume("voxel normal")?,
-                emission: emissive.then(|| u32_volume("voxel emission")).transpose()?,
-                flag: dynamic.then(|| u32_volume("static flags")).transpose()?,
+                albedo: buffer("voxel albedo (RGBA8 words)", 1)?,
+                normal: buffer("voxel normal (RGBA8 words)", 1)?,
+                emission: emissive
+                    .then(|| buffer("voxel emission (RGBA8 words)", 1))
+                    .transpose()?,
+                flag: dynamic.then(|| buffer("static flags", 1)).transpose()?,
             }
         } else {
             VoxelData::Sums {
@@ -125,7 +106,9 @@ impl Volumes {
         } else {
             (vk::Format::R16G16B16A16_SFLOAT, 8)
         };
-        let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED;
+        let usage = vk::ImageUsageFlags::STORAGE
+            | vk::ImageUsageFlags::SAMPLED
+            | vk::ImageUsageFlags::TRANSFER_SRC;
         let radiance = Image::new(ctx, "voxel radiance", ImageDesc::d3(format, n, usage))?;
         info.push(VolumeInfo {
             name: format!("voxel radiance ({format:?})"),
@@ -164,20 +147,23 @@ impl Volumes {
                 .border_color(vk::BorderColor::FLOAT_TRANSPARENT_BLACK)
                 .max_lod(vk::LOD_CLAMP_NONE),
         )?;
-        let dummy = Buffer::new(
-            ctx,
-            "unused binding",
-            16,
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-            MemoryLocation::GpuOnly,
-        )?;
+        let dummy = |i: usize| {
+            Buffer::new(
+                ctx,
+                &format!("unused binding {i}"),
+                16,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryLocation::GpuOnly,
+            )
+        };
+        let dummies = [dummy(0)?, dummy(1)?, dummy(2)?, dummy(3)?];
         Ok(Volumes {
             grid,
             data,
             radiance,
             faces,
             sampler,
-            dummy,
+            dummies,
             info,
         })
     }

@@ -6,7 +6,7 @@ use crate::render::pipelines::{
     self, Desc, DescriptorPool, GraphicsDesc, Pipeline, Set, SetLayout, Spec,
 };
 use crate::render::GpuScene;
-use crate::vk::{vk, Access, Context, Graph, VkResult};
+use crate::vk::{vk, Access, Buffer, Context, Graph, VkResult};
 use std::sync::Arc;
 
 /// Push-constant flag: the static pass (the paper's pass writes its flag volume then).
@@ -21,10 +21,10 @@ pub struct Voxelizer {
 }
 
 impl Voxelizer {
-    pub fn new(
+    pub fn new<'a>(
         ctx: &Arc<Context>,
         pool: &DescriptorPool,
-        volumes: &Volumes,
+        volumes: &'a Volumes,
         scene_layout: &SetLayout,
         material_layout: &SetLayout,
         paper: bool,
@@ -37,14 +37,14 @@ impl Voxelizer {
                 dynamic_accum,
                 dynamic_emission,
             } => {
-                let target = |accum, emission: &Option<crate::vk::Buffer>| {
+                let target = |accum, emission: &'a Option<Buffer>| {
                     pool.set(
                         frag,
                         &[
                             (0, Desc::Storage(accum)),
                             (
                                 1,
-                                Desc::Storage(emission.as_ref().unwrap_or(&volumes.dummy)),
+                                Desc::Storage(emission.as_ref().unwrap_or(&volumes.dummies[1])),
                             ),
                         ],
                     )
@@ -62,26 +62,25 @@ impl Voxelizer {
                 emission,
                 flag,
             } => {
-                let img = |i: &crate::vk::Image| Desc::StorageImage(i.view);
-                let s = pool.set(
-                    frag,
-                    &[
-                        (0, img(albedo)),
-                        (1, img(normal)),
-                        (2, img(emission.as_ref().unwrap_or(albedo))),
-                        (3, img(flag.as_ref().unwrap_or(albedo))),
-                    ],
-                )?;
+                let or_dummy = |b: &'a Option<Buffer>, i: usize| {
+                    Desc::Storage(b.as_ref().unwrap_or(&volumes.dummies[i]))
+                };
+                let descs = [
+                    (0, Desc::Storage(albedo)),
+                    (1, Desc::Storage(normal)),
+                    (2, or_dummy(emission, 2)),
+                    (3, or_dummy(flag, 3)),
+                ];
+                let s = pool.set(frag, &descs)?;
                 let clear = match flag {
-                    Some(flag) => {
-                        let comp = vk::ShaderStageFlags::COMPUTE;
+                    Some(_) => {
                         let set = pool.set(
-                            comp,
+                            vk::ShaderStageFlags::COMPUTE,
                             &[
-                                (0, img(albedo)),
-                                (1, img(normal)),
-                                (2, img(emission.as_ref().unwrap_or(albedo))),
-                                (3, img(flag)),
+                                (0, Desc::Storage(albedo)),
+                                (1, Desc::Storage(normal)),
+                                (2, or_dummy(emission, 2)),
+                                (3, or_dummy(flag, 3)),
                             ],
                         )?;
                         let p = pipelines::compute(
@@ -98,10 +97,10 @@ impl Voxelizer {
                 (s, None, clear)
             }
         };
-        let variant = if paper {
-            "voxelize.frag:PAPER"
+        let (geom, frag_shader) = if paper {
+            ("voxelize.geom:PAPER", "voxelize.frag:PAPER")
         } else {
-            "voxelize.frag"
+            ("voxelize.geom", "voxelize.frag")
         };
         let pipeline = pipelines::graphics(
             ctx,
@@ -109,8 +108,8 @@ impl Voxelizer {
                 name: "voxelize",
                 shaders: &[
                     (vk::ShaderStageFlags::VERTEX, "voxelize.vert"),
-                    (vk::ShaderStageFlags::GEOMETRY, "voxelize.geom"),
-                    (vk::ShaderStageFlags::FRAGMENT, variant),
+                    (vk::ShaderStageFlags::GEOMETRY, geom),
+                    (vk::ShaderStageFlags::FRAGMENT, frag_shader),
                 ],
                 sets: &[scene_layout, material_layout, &static_target.layout],
                 push_size: crate::render::DRAW_PUSH_SIZE,
@@ -138,6 +137,9 @@ impl Voxelizer {
         access: Access,
     ) -> crate::vk::graph::PassBuilder<'g, 'a, 'r> {
         let mut pass = pass;
+        for d in &volumes.dummies {
+            pass = pass.buffer(d, access);
+        }
         match &volumes.data {
             VoxelData::Sums {
                 static_accum,
@@ -160,11 +162,11 @@ impl Voxelizer {
                 emission,
                 flag,
             } => {
-                for i in [Some(albedo), Some(normal), emission.as_ref(), flag.as_ref()]
+                for b in [Some(albedo), Some(normal), emission.as_ref(), flag.as_ref()]
                     .into_iter()
                     .flatten()
                 {
-                    pass = pass.image(i, access);
+                    pass = pass.buffer(b, access);
                 }
             }
         }
@@ -202,14 +204,17 @@ impl Voxelizer {
                 Some((p, set)),
             ) => {
                 let mut pass = g.pass(clear_name);
-                for i in [Some(albedo), Some(normal), emission.as_ref()]
+                for b in [Some(albedo), Some(normal), emission.as_ref()]
                     .into_iter()
                     .flatten()
                 {
-                    pass = pass.image(i, Access::ComputeStorageReadWrite);
+                    pass = pass.buffer(b, Access::ComputeStorageReadWrite);
                 }
                 if let Some(f) = flag {
-                    pass = pass.image(f, Access::ComputeStorageRead);
+                    pass = pass.buffer(f, Access::ComputeStorageRead);
+                }
+                for b in &volumes.dummies {
+                    pass = pass.buffer(b, Access::ComputeStorageReadWrite);
                 }
                 pass.record(|cmd| unsafe {
                     d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, p.raw);
@@ -221,41 +226,11 @@ impl Voxelizer {
                         &[set.raw],
                         &[],
                     );
-                    let groups = n.div_ceil(4);
-                    d.cmd_dispatch(cmd, groups, groups, groups);
+                    d.cmd_dispatch(cmd, (n * n * n).div_ceil(64), 1, 1);
                 });
             }
-            (
-                VoxelData::Paper {
-                    albedo,
-                    normal,
-                    emission,
-                    flag,
-                },
-                false,
-                _,
-            ) => {
-                let mut pass = g.pass(clear_name);
-                let images: Vec<_> = [Some(albedo), Some(normal), emission.as_ref(), flag.as_ref()]
-                    .into_iter()
-                    .flatten()
-                    .collect();
-                for i in &images {
-                    pass = pass.image(i, Access::TransferWrite);
-                }
-                pass.record(|cmd| unsafe {
-                    for i in &images {
-                        d.cmd_clear_color_image(
-                            cmd,
-                            i.raw,
-                            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                            &vk::ClearColorValue { uint32: [0; 4] },
-                            &[i.full_range()],
-                        );
-                    }
-                });
-            }
-            (VoxelData::Sums { .. }, _, _) => {
+            _ => {
+                // A fill clears what this pass rebuilds (the paper's static pass clears all).
                 let pass =
                     Self::declare(g.pass(clear_name), volumes, dynamic, Access::TransferWrite);
                 let buffers: Vec<vk::Buffer> = match &volumes.data {
@@ -278,7 +253,16 @@ impl Voxelizer {
                                 .collect()
                         }
                     }
-                    _ => vec![],
+                    VoxelData::Paper {
+                        albedo,
+                        normal,
+                        emission,
+                        flag,
+                    } => [Some(albedo), Some(normal), emission.as_ref(), flag.as_ref()]
+                        .into_iter()
+                        .flatten()
+                        .map(|b| b.raw)
+                        .collect(),
                 };
                 pass.record(|cmd| unsafe {
                     for b in &buffers {
@@ -286,7 +270,6 @@ impl Voxelizer {
                     }
                 });
             }
-            _ => {}
         }
 
         let name = if dynamic {
@@ -307,7 +290,7 @@ impl Voxelizer {
         }
         // The paper's dynamic pass reads the static flags.
         if let (VoxelData::Paper { flag: Some(f), .. }, true) = (&volumes.data, dynamic) {
-            pass = pass.image(f, Access::FragmentStorageReadWrite);
+            pass = pass.buffer(f, Access::FragmentStorageReadWrite);
         }
         let target = if dynamic {
             self.dynamic_target.as_ref().unwrap_or(&self.static_target)

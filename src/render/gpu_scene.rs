@@ -269,7 +269,9 @@ impl GpuScene {
                         .address_mode_u(address_mode(t.wrap_s))
                         .address_mode_v(address_mode(t.wrap_t))
                         .address_mode_w(vk::SamplerAddressMode::REPEAT)
-                        .anisotropy_enable(true)
+                        // Anisotropic filtering makes no sense with nearest filtering (and
+                        // blends texels on some drivers).
+                        .anisotropy_enable(!t.min_nearest)
                         .max_anisotropy(ctx.properties.limits.max_sampler_anisotropy.min(8.0))
                         .max_lod(vk::LOD_CLAMP_NONE);
                     samplers.push(Sampler::new(ctx, &info)?);

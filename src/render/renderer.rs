@@ -982,6 +982,14 @@ impl Renderer {
         }
     }
 
+    /// Debug readback of the voxel volumes as the last frame left them (None in direct mode).
+    pub fn read_voxels(&mut self) -> VkResult<Option<crate::gi::VoxelDump>> {
+        match &self.gi {
+            Some(gi) => Ok(Some(gi.read_voxels(&self.ctx, &mut self.states)?)),
+            None => Ok(None),
+        }
+    }
+
     /// Linear radiance, RGB per pixel, row 0 at the top (after `render(true)`).
     pub fn radiance(&self) -> Vec<[f32; 3]> {
         let bytes = self

@@ -174,3 +174,97 @@ pub fn top_pixel_to_floor(x: u32, y: u32, w: u32, h: u32, height: f32, yfov_deg:
 pub fn v4(v: Vec3) -> Vec4 {
     v.extend(1.0)
 }
+
+/// Adds one triangle (with its own primitive and instance) and returns the instance index.
+pub fn triangle(scene: &mut Scene, p: [Vec3; 3], uv: [[f32; 2]; 3], material: u32) -> usize {
+    let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
+    let base = scene.vertices.len() as u32;
+    let mut bounds = Aabb::EMPTY;
+    for (c, uv) in p.iter().zip(uv) {
+        scene.vertices.push(Vertex {
+            position: c.to_array(),
+            normal: n.to_array(),
+            uv,
+            tangent: [1.0, 0.0, 0.0, 1.0],
+        });
+        bounds.extend(*c);
+    }
+    let first = scene.indices.len() as u32;
+    scene.indices.extend([base, base + 1, base + 2]);
+    scene.primitives.push(Primitive {
+        first_index: first,
+        index_count: 3,
+        material,
+        bounds,
+    });
+    scene.instances.push(Instance {
+        primitive: scene.primitives.len() as u32 - 1,
+        node: scene.instances.len(),
+        node_name: None,
+        world: Mat4::IDENTITY,
+    });
+    scene.bounds = scene.bounds.union(&bounds);
+    scene.instances.len() - 1
+}
+
+/// Renders `frames` frames under validation and reads the voxels back.
+pub fn render_voxels(scene: &Scene, settings: RenderSettings) -> voxgi::gi::VoxelDump {
+    let ctx = context();
+    let stats = ctx.stats.clone();
+    let dump = {
+        let mut r = Renderer::new(&ctx, scene, settings).expect("renderer");
+        r.render(false).expect("frame");
+        r.read_voxels()
+            .expect("readback")
+            .expect("voxel passes ran")
+    };
+    drop(ctx);
+    assert_eq!(
+        stats.count(),
+        0,
+        "validation messages:\n{}",
+        stats.messages().join("\n")
+    );
+    dump
+}
+
+/// 6-connected flood fill through empty voxels from every empty boundary voxel; true where
+/// the outside reaches.
+pub fn outside_reach(d: &voxgi::gi::VoxelDump) -> Vec<bool> {
+    let n = d.resolution as i32;
+    let mut seen = vec![false; d.filled.len()];
+    let mut stack = Vec::new();
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                let on_edge = x == 0 || y == 0 || z == 0 || x == n - 1 || y == n - 1 || z == n - 1;
+                let i = d.index(x as u32, y as u32, z as u32);
+                if on_edge && !d.filled[i] && !seen[i] {
+                    seen[i] = true;
+                    stack.push((x, y, z));
+                }
+            }
+        }
+    }
+    while let Some((x, y, z)) = stack.pop() {
+        for (dx, dy, dz) in [
+            (1, 0, 0),
+            (-1, 0, 0),
+            (0, 1, 0),
+            (0, -1, 0),
+            (0, 0, 1),
+            (0, 0, -1),
+        ] {
+            let (a, b, c) = (x + dx, y + dy, z + dz);
+            if a < 0 || b < 0 || c < 0 || a >= n || b >= n || c >= n {
+                continue;
+            }
+            let i = d.index(a as u32, b as u32, c as u32);
+            if !d.filled[i] && !seen[i] {
+                seen[i] = true;
+                stack.push((a, b, c));
+            }
+        }
+    }
+    seen
+}

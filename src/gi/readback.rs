@@ -1,0 +1,282 @@
+//! Debug readback of the volumes: what voxelization and injection wrote, decoded on the CPU the
+//! way the shaders decode it (glsl/voxel_data.glsl), for tests and numerical checks.
+
+use super::volumes::{VoxelData, ACCUM_STRIDE, EMISSION_STRIDE};
+use super::Gi;
+use crate::vk::{vk, Access, Buffer, Context, Graph, Image, ResourceStates, VkResult};
+use glam::{Vec3, Vec4};
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+/// Every voxel, x fastest then y then z.
+#[derive(Clone, Debug)]
+pub struct VoxelDump {
+    pub resolution: u32,
+    pub filled: Vec<bool>,
+    /// Fragments averaged into each voxel (default mode; the 8-bit count for --paper).
+    pub count: Vec<u32>,
+    pub albedo: Vec<Vec3>,
+    /// The averaged normal (not normalized: its length is how much the normals agree).
+    pub normal: Vec<Vec3>,
+    pub emission: Vec<Vec3>,
+    /// Outgoing radiance and opacity, when the voxels are lit.
+    pub radiance: Option<Vec<Vec4>>,
+}
+
+impl VoxelDump {
+    pub fn index(&self, x: u32, y: u32, z: u32) -> usize {
+        let n = self.resolution as usize;
+        x as usize + n * (y as usize + n * z as usize)
+    }
+}
+
+fn f16_to_f32(h: u16) -> f32 {
+    let sign = if h & 0x8000 != 0 { -1.0 } else { 1.0 };
+    let exp = ((h >> 10) & 0x1f) as i32;
+    let man = (h & 0x3ff) as f32;
+    match exp {
+        0 => sign * man * 2f32.powi(-24),
+        31 => {
+            if man == 0.0 {
+                sign * f32::INFINITY
+            } else {
+                f32::NAN
+            }
+        }
+        e => sign * (1.0 + man / 1024.0) * 2f32.powi(e - 15),
+    }
+}
+
+fn unpack_rgba8(v: u32) -> Vec4 {
+    Vec4::new(
+        (v & 0xff) as f32,
+        ((v >> 8) & 0xff) as f32,
+        ((v >> 16) & 0xff) as f32,
+        ((v >> 24) & 0xff) as f32,
+    )
+}
+
+fn words(bytes: &[u8]) -> Vec<u32> {
+    bytes
+        .chunks_exact(4)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect()
+}
+
+impl Gi {
+    /// Copies the volumes to host memory and decodes them. Waits for the GPU.
+    pub fn read_voxels(
+        &self,
+        ctx: &Arc<Context>,
+        states: &mut ResourceStates,
+    ) -> VkResult<VoxelDump> {
+        let n = self.volumes.grid.resolution;
+        let voxels = (n as u64).pow(3);
+        // Sources: (buffer, or image with bytes per texel), in a fixed order.
+        enum Src<'a> {
+            Buf(&'a Buffer),
+            Img(&'a Image, u64),
+        }
+        let mut sources: Vec<(&str, Src)> = Vec::new();
+        match &self.volumes.data {
+            VoxelData::Sums {
+                static_accum,
+                static_emission,
+                dynamic_accum,
+                dynamic_emission,
+            } => {
+                sources.push(("sa", Src::Buf(static_accum)));
+                if let Some(b) = static_emission {
+                    sources.push(("se", Src::Buf(b)));
+                }
+                if let Some(b) = dynamic_accum {
+                    sources.push(("da", Src::Buf(b)));
+                }
+                if let Some(b) = dynamic_emission {
+                    sources.push(("de", Src::Buf(b)));
+                }
+            }
+            VoxelData::Paper {
+                albedo,
+                normal,
+                emission,
+                ..
+            } => {
+                sources.push(("pa", Src::Buf(albedo)));
+                sources.push(("pn", Src::Buf(normal)));
+                if let Some(e) = emission {
+                    sources.push(("pe", Src::Buf(e)));
+                }
+            }
+        }
+        if self.lighting.is_some() {
+            let texel = if self.settings.paper { 4 } else { 8 };
+            sources.push(("r", Src::Img(&self.volumes.radiance, texel)));
+        }
+        let sizes: Vec<u64> = sources
+            .iter()
+            .map(|(_, s)| match s {
+                Src::Buf(b) => b.size,
+                Src::Img(_, t) => voxels * t,
+            })
+            .collect();
+        let total: u64 = sizes.iter().sum();
+        let host = Buffer::new(
+            ctx,
+            "voxel readback",
+            total,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        ctx.one_shot(|cmd| {
+            let mut g = Graph::new(ctx, cmd, states, None);
+            let mut pass = g
+                .pass("voxel readback")
+                .buffer(&host, Access::TransferWrite);
+            for (_, s) in &sources {
+                pass = match s {
+                    Src::Buf(b) => pass.buffer(b, Access::TransferRead),
+                    Src::Img(i, _) => pass.image(i, Access::TransferRead),
+                };
+            }
+            pass.record(|cmd| unsafe {
+                let mut offset = 0;
+                for ((_, s), size) in sources.iter().zip(&sizes) {
+                    match s {
+                        Src::Buf(b) => ctx.device.cmd_copy_buffer(
+                            cmd,
+                            b.raw,
+                            host.raw,
+                            &[vk::BufferCopy {
+                                src_offset: 0,
+                                dst_offset: offset,
+                                size: *size,
+                            }],
+                        ),
+                        Src::Img(i, _) => ctx.device.cmd_copy_image_to_buffer(
+                            cmd,
+                            i.raw,
+                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                            host.raw,
+                            &[vk::BufferImageCopy::default()
+                                .buffer_offset(offset)
+                                .image_subresource(vk::ImageSubresourceLayers {
+                                    aspect_mask: vk::ImageAspectFlags::COLOR,
+                                    mip_level: 0,
+                                    base_array_layer: 0,
+                                    layer_count: 1,
+                                })
+                                .image_extent(vk::Extent3D {
+                                    width: n,
+                                    height: n,
+                                    depth: n,
+                                })],
+                        ),
+                    }
+                    offset += size;
+                }
+            });
+            g.pass("voxel readback to host")
+                .buffer(&host, Access::HostRead)
+                .untimed()
+                .record(|_| {});
+        })?;
+        states.forget(host.raw);
+
+        let bytes = host.mapped().expect("readback is host-visible");
+        let mut parts = std::collections::HashMap::new();
+        let mut offset = 0usize;
+        for ((name, _), size) in sources.iter().zip(&sizes) {
+            parts.insert(*name, &bytes[offset..offset + *size as usize]);
+            offset += *size as usize;
+        }
+        let nv = voxels as usize;
+        let mut dump = VoxelDump {
+            resolution: n,
+            filled: vec![false; nv],
+            count: vec![0; nv],
+            albedo: vec![Vec3::ZERO; nv],
+            normal: vec![Vec3::ZERO; nv],
+            emission: vec![Vec3::ZERO; nv],
+            radiance: None,
+        };
+        if let Some(sa) = parts.get("sa") {
+            let sa = words(sa);
+            let da = parts.get("da").map(|b| words(b));
+            let se = parts.get("se").map(|b| words(b));
+            let de = parts.get("de").map(|b| words(b));
+            let stride = ACCUM_STRIDE as usize;
+            let es = EMISSION_STRIDE as usize;
+            for v in 0..nv {
+                let mut w: Vec<u32> = sa[v * stride..(v + 1) * stride].to_vec();
+                if let Some(da) = &da {
+                    for (a, b) in w.iter_mut().zip(&da[v * stride..(v + 1) * stride]) {
+                        *a = a.wrapping_add(*b);
+                    }
+                }
+                let count = w[0];
+                dump.count[v] = count;
+                dump.filled[v] = count > 0;
+                if count == 0 {
+                    continue;
+                }
+                let inv = 1.0 / (count as f32 * 4096.0);
+                dump.albedo[v] = Vec3::new(w[1] as f32, w[2] as f32, w[3] as f32) * inv;
+                dump.normal[v] =
+                    Vec3::new(w[4] as i32 as f32, w[5] as i32 as f32, w[6] as i32 as f32) * inv;
+                if let Some(se) = &se {
+                    let mut e = [se[v * es], se[v * es + 1], se[v * es + 2]];
+                    if let Some(de) = &de {
+                        for k in 0..3 {
+                            e[k] = e[k].wrapping_add(de[v * es + k]);
+                        }
+                    }
+                    dump.emission[v] = Vec3::new(e[0] as f32, e[1] as f32, e[2] as f32)
+                        / (count as f32 * self.emission_scale);
+                }
+            }
+        }
+        if let (Some(pa), Some(pn)) = (parts.get("pa"), parts.get("pn")) {
+            let (pa, pn) = (words(pa), words(pn));
+            let pe = parts.get("pe").map(|b| words(b));
+            for v in 0..nv {
+                let a = unpack_rgba8(pa[v]);
+                dump.count[v] = a.w as u32;
+                dump.filled[v] = a.w > 0.0;
+                dump.albedo[v] = a.truncate() / 255.0;
+                dump.normal[v] = unpack_rgba8(pn[v]).truncate() / 255.0 * 2.0 - Vec3::ONE;
+                if let Some(pe) = &pe {
+                    dump.emission[v] = unpack_rgba8(pe[v]).truncate() / 255.0;
+                }
+            }
+        }
+        if let Some(r) = parts.get("r") {
+            let texels: Vec<Vec4> = if self.settings.paper {
+                words(r)
+                    .into_iter()
+                    .map(|w| unpack_rgba8(w) / 255.0)
+                    .collect()
+            } else {
+                r.chunks_exact(8)
+                    .map(|c| {
+                        let h = |i: usize| f16_to_f32(u16::from_le_bytes([c[i], c[i + 1]]));
+                        Vec4::new(h(0), h(2), h(4), h(6))
+                    })
+                    .collect()
+            };
+            dump.radiance = Some(texels);
+        }
+        Ok(dump)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn half_floats_decode() {
+        assert_eq!(super::f16_to_f32(0x3c00), 1.0);
+        assert_eq!(super::f16_to_f32(0x4c40), 17.0);
+        assert_eq!(super::f16_to_f32(0xc000), -2.0);
+        assert!(super::f16_to_f32(0x7e00).is_nan());
+    }
+}

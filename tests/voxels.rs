@@ -1,0 +1,323 @@
+//! Voxelization: the atomic average (and the paper's wrap), watertightness of a closed mesh,
+//! HDR emission, and dynamic geometry that leaves static voxels alone.
+
+mod gpu;
+use glam::{Mat4, Quat, Vec3};
+use gpu::*;
+use voxgi::gi::{GiSettings, VoxelGrid};
+use voxgi::render::{Mode, RenderSettings};
+use voxgi::scene::{Material, Scene, TexRef, Texture, Wrap};
+
+fn voxel_settings(n: u32, paper: bool, mode: Mode) -> RenderSettings {
+    RenderSettings {
+        width: 16,
+        height: 16,
+        shadow_resolution: 64,
+        mode,
+        gi: if paper {
+            GiSettings::paper(n)
+        } else {
+            GiSettings {
+                voxels: n,
+                ..Default::default()
+            }
+        },
+        ..Default::default()
+    }
+}
+
+/// Two tiny anchor triangles that make the scene bounds the unit cube.
+fn anchor(s: &mut Scene, m: u32) {
+    let e = 0.001;
+    triangle(
+        s,
+        [Vec3::ZERO, Vec3::new(e, 0.0, 0.0), Vec3::new(0.0, e, 0.0)],
+        [[0.0; 2]; 3],
+        m,
+    );
+    triangle(
+        s,
+        [
+            Vec3::ONE,
+            Vec3::new(1.0 - e, 1.0, 1.0),
+            Vec3::new(1.0, 1.0 - e, 1.0),
+        ],
+        [[0.0; 2]; 3],
+        m,
+    );
+}
+
+/// Fragments per target voxel: `counts[k]` triangles inside voxel k, each sampling texel
+/// `values[k](i)` of a grey ramp texture. Returns the scene and, per target, its voxel and the
+/// exact mean of what was written.
+fn stacked_triangles(counts: &[u32], varied: bool, n: u32) -> (Scene, Vec<([u32; 3], f32)>) {
+    let mut s = empty_scene();
+    // A 256-texel ramp: texel t has value t / 255.
+    let ramp: Vec<u8> = (0..256u32)
+        .flat_map(|t| [t as u8, t as u8, t as u8, 255])
+        .collect();
+    s.textures.push(Texture {
+        name: "ramp".into(),
+        width: 256,
+        height: 1,
+        rgba8: ramp,
+        srgb: false,
+        wrap_s: Wrap::ClampToEdge,
+        wrap_t: Wrap::ClampToEdge,
+        mag_nearest: true,
+        min_nearest: true,
+    });
+    s.materials.push(Material {
+        base_color_tex: Some(TexRef {
+            texture: 0,
+            tex_coord: 0,
+        }),
+        metallic: 0.0,
+        specular_factor: 0.0,
+        ..Material::default()
+    });
+    anchor(&mut s, 0);
+    let grid = VoxelGrid::fit(
+        &voxgi::scene::Aabb {
+            min: Vec3::ZERO,
+            max: Vec3::ONE,
+        },
+        n,
+    );
+    let vs = grid.voxel_size();
+    let mut targets = Vec::new();
+    for (k, &count) in counts.iter().enumerate() {
+        // Target voxels on a diagonal-free row, away from the anchors.
+        let c = [
+            2 + (k as u32 % (n - 4)),
+            3 + 2 * (k as u32 / (n - 4)),
+            n / 2,
+        ];
+        let centre = grid.origin + (Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) + 0.5) * vs;
+        let mut sum = 0.0;
+        for i in 0..count {
+            let texel = if varied {
+                (i * 37 + k as u32 * 11) % 256
+            } else {
+                204
+            };
+            sum += texel as f32 / 255.0;
+            let u = (texel as f32 + 0.5) / 256.0;
+            // A small triangle in the XY plane around the voxel centre (one fragment each).
+            let h = 0.25 * vs;
+            triangle(
+                &mut s,
+                [
+                    centre + Vec3::new(-h, -h, 0.0),
+                    centre + Vec3::new(h, -h, 0.0),
+                    centre + Vec3::new(0.0, h, 0.0),
+                ],
+                [[u, 0.5]; 3],
+                0,
+            );
+        }
+        targets.push((c, sum / count as f32));
+    }
+    (s, targets)
+}
+
+const COUNTS: [u32; 12] = [1, 2, 3, 17, 254, 255, 256, 257, 511, 512, 1000, 2000];
+
+#[test]
+fn atomic_average_is_exact_for_up_to_2000_fragments() {
+    for varied in [false, true] {
+        let (s, targets) = stacked_triangles(&COUNTS, varied, 32);
+        let d = render_voxels(&s, voxel_settings(32, false, Mode::VoxelsAlbedo));
+        for ((c, mean), &count) in targets.iter().zip(&COUNTS) {
+            let i = d.index(c[0], c[1], c[2]);
+            assert_eq!(d.count[i], count, "voxel {c:?}: fragment count");
+            let got = d.albedo[i];
+            // Each fragment rounds to 1/4096; the mean is off by at most half of that.
+            for ch in 0..3 {
+                assert!(
+                    (got[ch] - mean).abs() <= 0.5 / 4096.0 + 1e-6,
+                    "{count} {} fragments: mean {mean}, got {got}",
+                    if varied { "varied" } else { "equal" }
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn paper_average_wraps_at_256_fragments() {
+    let (s, targets) = stacked_triangles(&COUNTS, false, 32);
+    let d = render_voxels(&s, voxel_settings(32, true, Mode::VoxelsAlbedo));
+    for ((c, mean), &count) in targets.iter().zip(&COUNTS) {
+        let i = d.index(c[0], c[1], c[2]);
+        let stored = count % 256;
+        // The original keeps the count in 8 bits: 256 fragments read as an empty voxel.
+        assert_eq!(d.count[i], stored, "{count} fragments: 8-bit count");
+        assert_eq!(d.filled[i], stored != 0, "{count} fragments");
+        if stored != 0 {
+            assert!(
+                (d.albedo[i].x - mean).abs() <= 1.0 / 255.0,
+                "{count}: {}",
+                d.albedo[i]
+            );
+        }
+    }
+}
+
+/// A closed, rotated UV sphere.
+fn sphere(s: &mut Scene, centre: Vec3, r: f32, m: u32) {
+    let (rings, segments) = (24, 48);
+    let rot = Quat::from_euler(glam::EulerRot::XYZ, 0.3, 0.7, 0.2);
+    let p = |i: u32, j: u32| {
+        let th = std::f32::consts::PI * i as f32 / rings as f32;
+        let ph = 2.0 * std::f32::consts::PI * j as f32 / segments as f32;
+        centre + rot * Vec3::new(th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin()) * r
+    };
+    for i in 0..rings {
+        for j in 0..segments {
+            let (a, b, c, d) = (p(i, j), p(i + 1, j), p(i + 1, j + 1), p(i, j + 1));
+            // At the poles one of the two triangles of a quad collapses.
+            if i != rings - 1 {
+                triangle(s, [a, c, b], [[0.0; 2]; 3], m);
+            }
+            if i != 0 {
+                triangle(s, [a, d, c], [[0.0; 2]; 3], m);
+            }
+        }
+    }
+}
+
+#[test]
+fn closed_mesh_voxelizes_watertight() {
+    for n in [16u32, 37, 64] {
+        let mut s = empty_scene();
+        let m = lambert(&mut s, Vec3::splat(0.5));
+        anchor(&mut s, m);
+        let centre = Vec3::new(0.47, 0.52, 0.5);
+        sphere(&mut s, centre, 0.33, m);
+        let d = render_voxels(&s, voxel_settings(n, false, Mode::VoxelsAlbedo));
+        let reach = outside_reach(&d);
+        let grid = VoxelGrid::fit(&s.bounds, n);
+        let c = ((centre - grid.origin) / grid.voxel_size()).floor();
+        let i = d.index(c.x as u32, c.y as u32, c.z as u32);
+        assert!(
+            !d.filled[i],
+            "{n}^3: the sphere's centre is filled (the shell is too thick)"
+        );
+        assert!(
+            !reach[i],
+            "{n}^3: the outside leaks into the sphere (a 6-connected hole)"
+        );
+    }
+}
+
+#[test]
+fn hdr_emission_survives_unclamped() {
+    let mut s = empty_scene();
+    let m = lambert(&mut s, Vec3::splat(0.5));
+    anchor(&mut s, m);
+    s.materials.push(Material {
+        base_color: glam::Vec4::new(0.0, 0.0, 0.0, 1.0),
+        metallic: 0.0,
+        specular_factor: 0.0,
+        emissive: Vec3::new(17.0, 4.0, 0.25),
+        ..Material::default()
+    });
+    let y = 0.5;
+    quad(
+        &mut s,
+        [
+            Vec3::new(0.2, y, 0.8),
+            Vec3::new(0.8, y, 0.8),
+            Vec3::new(0.8, y, 0.2),
+            Vec3::new(0.2, y, 0.2),
+        ],
+        1,
+    );
+    let d = render_voxels(&s, voxel_settings(32, false, Mode::VoxelsRadiance));
+    let radiance = d.radiance.as_ref().unwrap();
+    let mut checked = 0;
+    for (i, e) in d.emission.iter().enumerate() {
+        if d.filled[i] && e.x > 1.0 {
+            assert!(
+                (e.x - 17.0).abs() < 0.17 && (e.y - 4.0).abs() < 0.04,
+                "emission {e}"
+            );
+            // The radiance volume holds it too (emission plus no light), in a float format.
+            assert!(
+                (radiance[i].x - 17.0).abs() < 0.17,
+                "radiance {}",
+                radiance[i]
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 50, "only {checked} emitter voxels");
+}
+
+#[test]
+fn dynamic_node_leaves_nothing_behind_and_static_voxels_stay() {
+    for paper in [false, true] {
+        let mut s = empty_scene();
+        let floor_m = lambert(&mut s, Vec3::splat(0.5));
+        let box_m = lambert(&mut s, Vec3::new(0.9, 0.1, 0.1));
+        floor(&mut s, 1.0, floor_m);
+        // A small quad standing above the floor: the dynamic node.
+        let first = s.instances.len();
+        quad(
+            &mut s,
+            [
+                Vec3::new(-0.6, 0.3, 0.0),
+                Vec3::new(-0.3, 0.3, 0.0),
+                Vec3::new(-0.3, 0.6, 0.0),
+                Vec3::new(-0.6, 0.6, 0.0),
+            ],
+            box_m,
+        );
+        let node = s.instances[first].node;
+        // Bounds that hold both places.
+        s.bounds.extend(Vec3::new(1.0, 1.0, 1.0));
+        let mut settings = voxel_settings(32, paper, Mode::VoxelsAlbedo);
+        settings.dynamic_nodes = vec![node];
+        let ctx = context();
+        let stats = ctx.stats.clone();
+        {
+            let mut r = voxgi::render::Renderer::new(&ctx, &s, settings).unwrap();
+            r.render(false).unwrap();
+            let before = r.read_voxels().unwrap().unwrap();
+            let red = |d: &voxgi::gi::VoxelDump| -> Vec<usize> {
+                (0..d.filled.len())
+                    .filter(|&i| d.filled[i] && d.albedo[i].x > 0.6)
+                    .collect()
+            };
+            let old = red(&before);
+            assert!(!old.is_empty());
+            // Move it 0.9 m along +X, across the floor.
+            r.set_node_transform(node, Mat4::from_translation(Vec3::new(0.9, 0.0, 0.0)));
+            for _ in 0..3 {
+                r.render(false).unwrap();
+            }
+            let after = r.read_voxels().unwrap().unwrap();
+            let new = red(&after);
+            assert!(!new.is_empty(), "the moved node is not voxelized");
+            for i in &old {
+                assert!(
+                    !new.contains(i),
+                    "voxel {i} still holds the node at its old place"
+                );
+            }
+            // Static voxels (the floor) are exactly as before.
+            for i in 0..before.filled.len() {
+                if before.filled[i] && !old.contains(&i) {
+                    assert!(after.filled[i], "static voxel {i} was cleared");
+                    assert_eq!(
+                        before.albedo[i], after.albedo[i],
+                        "static voxel {i} changed"
+                    );
+                }
+            }
+        }
+        drop(ctx);
+        assert_eq!(stats.count(), 0, "{}", stats.messages().join("\n"));
+    }
+}
