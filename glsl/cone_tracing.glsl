@@ -37,8 +37,10 @@ vec4 sample_cone(vec3 uvw, vec3 dir, float diameter) {
     if (lod < 1.0) s = mix(textureLod(radiance_tex, uvw, 0.0), s, clamp(lod, 0.0, 1.0));
 #endif
 #else
-    // Level 0 of the directional volumes has texels of two voxels.
-    float level = log2(max(diameter, vs) / vs);
+    // Level 0 of the directional volumes has texels of two voxels. A trilinear sample reaches a
+    // texel beyond its own, so at the cone's matched level it would always touch the surface the
+    // cone leaves: sample frame.tuning.x levels finer.
+    float level = max(log2(max(diameter, vs) / vs) - frame.tuning.x, 0.0);
     vec4 s = sample_directional(uvw, dir, max(level - 1.0, 0.0));
 #if CONE_FULL_RES
     if (level < 1.0) s = mix(textureLod(radiance_tex, uvw, 0.0), s, level);

@@ -29,7 +29,7 @@ fn shared_scenes() -> Vec<PathBuf> {
     out
 }
 
-fn render_scene(path: &Path) {
+fn render_scene(path: &Path, mode: Mode) {
     let mut s = scene::load(path).unwrap_or_else(|e| panic!("{e}"));
     if s.lights.is_empty() {
         s.lights.push(Light {
@@ -44,10 +44,14 @@ fn render_scene(path: &Path) {
     let img = gpu::render(
         &s,
         RenderSettings {
-            width: 96,
-            height: 96,
+            width: 64,
+            height: 64,
             shadow_resolution: 512,
-            mode: Mode::Direct,
+            mode,
+            gi: voxgi::gi::GiSettings {
+                voxels: 64,
+                ..Default::default()
+            },
             ..Default::default()
         },
     );
@@ -79,6 +83,14 @@ fn every_shared_scene_renders_clean() {
     );
     for s in &scenes {
         eprintln!("rendering {}", s.display());
-        render_scene(s);
+        render_scene(s, Mode::Direct);
+    }
+}
+
+#[test]
+fn every_shared_scene_renders_full_frames_at_64_cubed() {
+    for s in &shared_scenes() {
+        eprintln!("rendering {}", s.display());
+        render_scene(s, Mode::Full);
     }
 }

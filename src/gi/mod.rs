@@ -49,6 +49,8 @@ pub struct GiSettings {
     pub ao_falloff: f32,
     /// Voxel visibility by tracing the voxels instead of the shadow maps.
     pub voxel_shadows: bool,
+    /// Mip levels finer than the cone's diameter at which cones sample (the paper: 1).
+    pub lod_offset: f32,
 }
 
 impl Default for GiSettings {
@@ -64,6 +66,7 @@ impl Default for GiSettings {
             start_offset: 1.0,
             ao_falloff: 1.0,
             voxel_shadows: false,
+            lod_offset: 1.0,
         }
     }
 }
@@ -160,7 +163,9 @@ pub fn cone_set(count: u32, aperture_deg: f32, paper: bool) -> Vec<Vec4> {
         num += t * w;
         den += w;
     }
-    let tilt = (num / den) as f32;
+    // Cones tilted further than 15 degrees above the surface with their edge would mostly see
+    // the surface they leave.
+    let tilt = ((num / den) as f32).min(std::f32::consts::FRAC_PI_2 - beta - 15f32.to_radians());
     let ring = count - 1;
     let mut cones = vec![Vec4::new(0.0, 0.0, 1.0, cap)];
     for k in 0..ring {

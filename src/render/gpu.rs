@@ -31,6 +31,8 @@ pub struct FrameUniforms {
     pub trace: Vec4,
     /// diffuse cones: direction around +Z, weight
     pub cones: [Vec4; 16],
+    /// levels finer than the cone diameter to sample, unused x3
+    pub tuning: Vec4,
 }
 
 #[repr(C)]

@@ -268,3 +268,26 @@ pub fn outside_reach(d: &voxgi::gi::VoxelDump) -> Vec<bool> {
     }
     seen
 }
+
+/// The pixel a world point lands on (row 0 at the top), for the scene camera.
+pub fn project(scene: &Scene, w: u32, h: u32, p: Vec3) -> (u32, u32) {
+    let c = &scene.camera;
+    let proj = Mat4::perspective_rh(c.yfov, w as f32 / h as f32, c.znear, c.zfar);
+    let clip = proj * c.view() * p.extend(1.0);
+    let ndc = clip.truncate() / clip.w;
+    let x = ((ndc.x + 1.0) * 0.5 * w as f32).floor() as u32;
+    let y = ((1.0 - ndc.y) * 0.5 * h as f32).floor() as u32;
+    (x.min(w - 1), y.min(h - 1))
+}
+
+/// A camera at `eye` looking at `target`.
+pub fn look_at(scene: &mut Scene, eye: Vec3, target: Vec3, yfov_deg: f32) {
+    scene.camera = Camera {
+        name: None,
+        world: Mat4::look_at_rh(eye, target, Vec3::Y).inverse(),
+        yfov: yfov_deg.to_radians(),
+        znear: 0.01,
+        zfar: 100.0,
+        is_default: false,
+    };
+}
