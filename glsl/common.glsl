@@ -29,7 +29,7 @@ layout(set = 0, binding = 0, std140) uniform Frame {
 const uint FLAG_DYNAMIC = 1u;        // dynamic accumulators are bound and filled
 const uint FLAG_EMISSIVE = 2u;       // emission accumulators exist
 const uint FLAG_VOXEL_SHADOWS = 4u;  // visibility by tracing the voxels instead of shadow maps
-const uint FLAG_TWO_SIDED = 8u;      // treat cancelled normals as two-sided voxels
+const uint FLAG_CONE_SHADOWS = 8u;   // direct light shadowed by cones through the voxels
 
 struct Material {
     vec4 base_color;

@@ -11,6 +11,8 @@
 #define CONE_SET 2
 #define CONE_FULL_RES 1
 #include "cone_tracing.glsl"
+#include "brdf.glsl"
+#include "lights.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -92,6 +94,23 @@ void main() {
 #endif
         Cone c = trace_cone(origin, r, tan_half, t0, max_dist);
         specular = c.radiance * spec_reflectance;
+    }
+
+    if ((frame.grid_info.w & FLAG_CONE_SHADOWS) != 0u) {
+        // Soft shadows: the direct light again, each light's visibility from a narrow cone
+        // (the paper's aperture 0.03) towards it instead of the shadow map.
+        Surface surf = Surface(base, metallic, roughness, spec.rgb, spec.a);
+        vec3 d = emission.rgb;
+        for (uint i = 0u; i < frame.counts.x; i++) {
+            vec3 l;
+            float dist;
+            vec3 e = light_irradiance(lights[i], p, l, dist);
+            float n_dot_l = dot(n, l);
+            if (n_dot_l <= 0.0 || dot(geo, l) <= 0.0) continue;
+            Cone c = trace_cone(origin, l, 0.03, t0, min(dist, max_dist));
+            d += brdf(surf, n, v, l) * e * n_dot_l * (1.0 - c.opacity);
+        }
+        direct.rgb = d;
     }
 
 #ifdef PAPER

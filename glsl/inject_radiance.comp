@@ -20,6 +20,28 @@ layout(set = 1, binding = 5, rgba8) uniform writeonly image3D radiance;
 layout(set = 1, binding = 5, rgba16f) uniform writeonly image3D radiance;
 #endif
 
+// Visibility of the light by marching the voxels (--voxel-shadows), from two voxels out, one
+// voxel per step, up to the light or out of the grid. Default: any voxel on the way blocks.
+// PAPER: the original's accumulation v += (1 - v) * k / dst with k = 0.25 and dst in grid
+// units, which saturates near hits; returns 1 - v.
+float voxel_visibility(vec3 p, vec3 l, float dist) {
+    float vs = voxel_size();
+    float v = 0.0;
+    for (float t = 2.0 * vs; t < dist; t += vs) {
+        ivec3 c = ivec3(floor(world_to_grid(p + l * t) * float(grid_n())));
+        if (!in_grid(c)) break;
+        if (voxel_filled(c)) {
+#ifdef PAPER
+            v += (1.0 - v) * 0.25 / (t / frame.grid.w);
+            if (v >= 1.0) return 0.0;
+#else
+            return 0.0;
+#endif
+        }
+    }
+    return clamp(1.0 - v, 0.0, 1.0);
+}
+
 void main() {
     ivec3 c = ivec3(gl_GlobalInvocationID);
     if (!in_grid(c)) return;
@@ -53,7 +75,9 @@ void main() {
         if (n_dot_l <= 0.0 || all(equal(e, vec3(0.0)))) continue;
         // The shadow is looked up half a voxel out, on the side facing the light.
         vec3 side = (two_sided || dot(n, n) == 0.0) ? l : n;
-        float vis = shadow_visibility(light, p + side * 0.5 * vs, side, shadow_map);
+        float vis = (frame.grid_info.w & FLAG_VOXEL_SHADOWS) != 0u
+            ? voxel_visibility(p + side * 0.5 * vs, l, dist)
+            : shadow_visibility(light, p + side * 0.5 * vs, side, shadow_map);
         irradiance += e * n_dot_l * vis;
     }
 #ifdef PAPER

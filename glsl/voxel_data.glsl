@@ -20,6 +20,10 @@ layout(set = VOXEL_SET, binding = 0, std430) readonly buffer AlbedoGrid { uint a
 layout(set = VOXEL_SET, binding = 1, std430) readonly buffer NormalGrid { uint normal_grid[]; };
 layout(set = VOXEL_SET, binding = 2, std430) readonly buffer EmissionGrid { uint emission_grid[]; };
 
+bool voxel_filled(ivec3 c) {
+    return (albedo_grid[voxel_index(c)] >> 24u) != 0u;
+}
+
 Voxel load_voxel(ivec3 c) {
     Voxel v;
     uint i = voxel_index(c);
@@ -39,6 +43,13 @@ layout(set = VOXEL_SET, binding = 0, std430) readonly buffer StaticAccum { uint 
 layout(set = VOXEL_SET, binding = 1, std430) readonly buffer StaticEmission { uint static_emission[]; };
 layout(set = VOXEL_SET, binding = 2, std430) readonly buffer DynamicAccum { uint dynamic_accum[]; };
 layout(set = VOXEL_SET, binding = 3, std430) readonly buffer DynamicEmission { uint dynamic_emission[]; };
+
+bool voxel_filled(ivec3 c) {
+    uint i = voxel_index(c) * ACCUM_STRIDE;
+    uint count = static_accum[i];
+    if ((frame.grid_info.w & FLAG_DYNAMIC) != 0u) count += dynamic_accum[i];
+    return count > 0u;
+}
 
 Voxel load_voxel(ivec3 c) {
     Voxel v;

@@ -16,7 +16,7 @@ USAGE:
   voxgi render [SCENE] [--out FILE] [--width W] [--height H] [--mode MODE]
                [--frames N] [--exposure EV] [--shadow-res N]
                [--validate] [--timings] [--device NAME]
-  voxgi info SCENE [--device NAME]
+  voxgi info SCENE [render options]
 
   SCENE        a glTF 2.0 file (.gltf or .glb); render defaults to the bundled Cornell box
   --out FILE   .exr: linear radiance (RGB float); .png: display image (default voxgi.png)
@@ -31,6 +31,7 @@ USAGE:
   --cones N, --aperture DEG, --step F   diffuse cones per pixel (6), their aperture (60),
                step as a fraction of the cone diameter (0.5)
   --voxel-shadows         voxel visibility by tracing the voxels (else the shadow maps)
+  --cone-shadows          soft shadows: direct light shadowed by cones through the voxels
   --frames N   frames to render (timings are medians over them; default 1, 5 with --timings)
   --exposure EV           display exposure for .png, in stops (default 0)
   --shadow-res N          shadow-map texels per side (default 2048)
@@ -58,6 +59,7 @@ const FLAGS: &[&str] = &[
     "--help",
     "--paper",
     "--voxel-shadows",
+    "--cone-shadows",
 ];
 const VALUED: &[&str] = &[
     "--out",
@@ -170,6 +172,41 @@ fn parse_sun(spec: &str) -> Result<scene::Light> {
     })
 }
 
+/// Image, mode and voxel settings from the command line.
+fn render_settings(args: &Args) -> Result<RenderSettings> {
+    let width: u32 = args.number("--width", 512)?;
+    let height: u32 = args.number("--height", 512)?;
+    if width == 0 || height == 0 || width > 16384 || height > 16384 {
+        bail!("image size {width}x{height} is out of range (1 to 16384)");
+    }
+    let mode: Mode = args
+        .value("--mode")
+        .unwrap_or("full")
+        .parse()
+        .map_err(anyhow::Error::msg)?;
+    let shadow_resolution: u32 = args.number("--shadow-res", 2048)?;
+    if !(16..=16384).contains(&shadow_resolution) {
+        bail!("--shadow-res {shadow_resolution} is out of range (16 to 16384)");
+    }
+    let mip = args
+        .value("--mip")
+        .map(|_| args.number("--mip", 0u32))
+        .transpose()?;
+    if mip.is_some() && mode != Mode::VoxelsRadiance {
+        bail!("--mip goes with --mode voxels-radiance");
+    }
+    Ok(RenderSettings {
+        width,
+        height,
+        mode,
+        shadow_resolution,
+        timings: args.flag("--timings"),
+        gi: gi_settings(args)?,
+        mip,
+        ..Default::default()
+    })
+}
+
 /// The voxel passes' settings from the command line.
 fn gi_settings(args: &Args) -> Result<GiSettings> {
     let voxels: u32 = args.number("--voxels", 128)?;
@@ -201,6 +238,7 @@ fn gi_settings(args: &Args) -> Result<GiSettings> {
         bail!("--step must be between 0.05 and 4");
     }
     gi.voxel_shadows = args.flag("--voxel-shadows");
+    gi.cone_shadows = args.flag("--cone-shadows");
     Ok(gi)
 }
 
@@ -218,23 +256,10 @@ fn render(args: &Args) -> Result<()> {
             out.display()
         );
     }
-    let width: u32 = args.number("--width", 512)?;
-    let height: u32 = args.number("--height", 512)?;
-    if width == 0 || height == 0 || width > 16384 || height > 16384 {
-        bail!("image size {width}x{height} is out of range (1 to 16384)");
-    }
-    let mode: Mode = args
-        .value("--mode")
-        .unwrap_or("full")
-        .parse()
-        .map_err(anyhow::Error::msg)?;
-    let timings = args.flag("--timings");
+    let settings = render_settings(args)?;
+    let (width, height, timings) = (settings.width, settings.height, settings.timings);
     let frames: u32 = args.number("--frames", if timings { 5 } else { 1 })?.max(1);
     let exposure: f32 = args.number("--exposure", 0.0)?;
-    let shadow_resolution: u32 = args.number("--shadow-res", 2048)?;
-    if !(16..=16384).contains(&shadow_resolution) {
-        bail!("--shadow-res {shadow_resolution} is out of range (16 to 16384)");
-    }
 
     let mut scene = load_scene(&scene_path)?;
     if let Some(spec) = args.value("--sun") {
@@ -250,19 +275,6 @@ fn render(args: &Args) -> Result<()> {
     let stats = ctx.stats.clone();
     let validating = ctx.validating;
     eprintln!("device: {}", ctx.device_info);
-    let settings = RenderSettings {
-        width,
-        height,
-        mode,
-        shadow_resolution,
-        timings,
-        gi: gi_settings(args)?,
-        mip: args
-            .value("--mip")
-            .map(|_| args.number("--mip", 0u32))
-            .transpose()?,
-        ..Default::default()
-    };
     let image = {
         let mut renderer = Renderer::new(&ctx, &scene, settings)?;
         for f in 0..frames {
@@ -341,10 +353,60 @@ fn info(args: &Args) -> Result<()> {
         c.znear,
         c.zfar
     );
-    match context(args) {
-        Ok(ctx) => println!("device     {}", ctx.device_info),
-        Err(e) => println!("device     none usable: {e}"),
+    let ctx = match context(args) {
+        Ok(ctx) => ctx,
+        Err(e) => {
+            println!("device     none usable: {e}");
+            return Ok(());
+        }
+    };
+    println!("device     {}", ctx.device_info);
+    // What a render with these options would run and allocate.
+    let settings = render_settings(args)?;
+    let mode = settings.mode;
+    let renderer = Renderer::new(&ctx, &scene, settings)?;
+    println!(
+        "passes     {} ({mode:?} mode)",
+        renderer.passes().join(", ")
+    );
+    if let Some(gi) = &renderer.gi {
+        let g = gi.volumes.grid;
+        println!(
+            "grid       {0}^3 voxels of {1:.4} m from {2:?}, {3}",
+            g.resolution,
+            g.voxel_size(),
+            g.origin.to_array(),
+            if gi.settings.paper {
+                "paper"
+            } else {
+                "default"
+            }
+        );
     }
+    let mut report = ctx.allocator().generate_report().allocations;
+    report.sort_by_key(|a| std::cmp::Reverse(a.size));
+    let total: u64 = report.iter().map(|a| a.size).sum();
+    println!(
+        "GPU memory {:.1} MiB in {} allocations:",
+        total as f64 / 1048576.0,
+        report.len()
+    );
+    for a in report.iter().filter(|a| !a.name.starts_with("texture ")) {
+        println!("  {:<44} {:>10.2} MiB", a.name, a.size as f64 / 1048576.0);
+    }
+    let textures: Vec<_> = report
+        .iter()
+        .filter(|a| a.name.starts_with("texture "))
+        .collect();
+    if !textures.is_empty() {
+        let bytes: u64 = textures.iter().map(|a| a.size).sum();
+        println!(
+            "  {:<44} {:>10.2} MiB",
+            format!("{} textures", textures.len()),
+            bytes as f64 / 1048576.0
+        );
+    }
+    drop(renderer);
     Ok(())
 }
 

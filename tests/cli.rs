@@ -34,6 +34,8 @@ fn renders_the_bundled_scene_to_exr_and_png() {
             "64",
             "--height",
             "48",
+            "--voxels",
+            "32",
             "--validate",
         ]);
         assert!(ok, "render failed:\n{err}");

@@ -49,6 +49,8 @@ pub struct GiSettings {
     pub ao_falloff: f32,
     /// Voxel visibility by tracing the voxels instead of the shadow maps.
     pub voxel_shadows: bool,
+    /// Pixels' direct light shadowed by a cone through the voxels instead of the shadow maps.
+    pub cone_shadows: bool,
     /// Mip levels finer than the cone's diameter at which cones sample (the paper: 1).
     pub lod_offset: f32,
 }
@@ -66,6 +68,7 @@ impl Default for GiSettings {
             start_offset: 1.0,
             ao_falloff: 1.0,
             voxel_shadows: false,
+            cone_shadows: false,
             lod_offset: 1.0,
         }
     }
@@ -180,6 +183,7 @@ pub fn cone_set(count: u32, aperture_deg: f32, paper: bool) -> Vec<Vec4> {
 pub const FLAG_DYNAMIC: u32 = 1;
 pub const FLAG_EMISSIVE: u32 = 2;
 pub const FLAG_VOXEL_SHADOWS: u32 = 4;
+pub const FLAG_CONE_SHADOWS: u32 = 8;
 
 /// The voxel passes a renderer runs: only those its mode and scene need.
 pub struct Gi {
@@ -305,13 +309,11 @@ impl Gi {
     }
 
     pub fn flags(&self) -> u32 {
-        (if self.dynamic { FLAG_DYNAMIC } else { 0 })
-            | (if self.emissive { FLAG_EMISSIVE } else { 0 })
-            | (if self.settings.voxel_shadows {
-                FLAG_VOXEL_SHADOWS
-            } else {
-                0
-            })
+        let flag = |on: bool, f: u32| if on { f } else { 0 };
+        flag(self.dynamic, FLAG_DYNAMIC)
+            | flag(self.emissive, FLAG_EMISSIVE)
+            | flag(self.settings.voxel_shadows, FLAG_VOXEL_SHADOWS)
+            | flag(self.settings.cone_shadows, FLAG_CONE_SHADOWS)
     }
 
     /// Records the voxel passes up to the lit, mipmapped volumes (the trace is separate).

@@ -983,6 +983,35 @@ impl Renderer {
         }
     }
 
+    /// The passes a frame records, in order (what `--timings` will list).
+    pub fn passes(&self) -> Vec<String> {
+        let mut p = Vec::new();
+        if self.gpu.shadow_view_count > 0 {
+            p.push("shadows".to_string());
+        }
+        if let Some(gi) = &self.gi {
+            p.extend(gi.passes().iter().map(|s| s.to_string()));
+        }
+        let mode = self.settings.mode;
+        if mode.shades_pixels() {
+            p.push("gbuffer".into());
+        }
+        if matches!(mode, Mode::Full | Mode::Direct) {
+            p.push("lighting".into());
+        }
+        if self.gi.is_some() {
+            p.push(
+                if mode.shades_pixels() {
+                    "trace"
+                } else {
+                    "voxel view"
+                }
+                .into(),
+            );
+        }
+        p
+    }
+
     /// Debug readback of the voxel volumes as the last frame left them (None in direct mode).
     pub fn read_voxels(&mut self) -> VkResult<Option<crate::gi::VoxelDump>> {
         match &self.gi {
