@@ -309,3 +309,21 @@ fn light_from_an_emitter_reaches_the_floor_in_the_right_amount() {
         );
     }
 }
+
+#[test]
+fn paper_mode_and_odd_grids_render_clean_full_frames() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/cornell-box.gltf");
+    let s = voxgi::scene::load(&path).unwrap();
+    for (voxels, paper) in [(8, false), (37, false), (64, true), (37, true)] {
+        let mut set = settings(Mode::Full, voxels, 32);
+        if paper {
+            set.gi = GiSettings::paper(voxels);
+        }
+        let img = render(&s, set);
+        assert!(!img.has_non_finite(), "{voxels}^3 paper={paper}: NaN/Inf");
+        assert!(
+            img.pixels.iter().any(|p| p[0] > 0.0),
+            "{voxels}^3 paper={paper}: black"
+        );
+    }
+}
