@@ -282,6 +282,15 @@ fn render(args: &Args) -> Result<()> {
         }
         if let Some(t) = &renderer.timer {
             print!("{}", t.report());
+            let mut f = renderer.frame_ms.clone();
+            f.sort_by(|a, b| a.total_cmp(b));
+            println!(
+                "  {:<16} {:9.3} ms  (submit to fence, median of {}; lavapipe's timestamps can \
+                 miss compute work)",
+                "frame wall",
+                f[f.len() / 2],
+                f.len()
+            );
         } else if timings {
             eprintln!("warning: the device has no timestamps; no timings");
         }

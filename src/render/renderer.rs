@@ -180,6 +180,8 @@ pub struct Renderer {
     /// The voxel passes (absent in direct mode).
     pub gi: Option<Gi>,
     specular_needed: bool,
+    /// Wall time of each frame from submission to its fence, in milliseconds.
+    pub frame_ms: Vec<f64>,
     ctx: Arc<Context>,
 }
 
@@ -559,6 +561,7 @@ impl Renderer {
             instance_nodes: scene.instances.iter().map(|i| i.node).collect(),
             gi,
             specular_needed,
+            frame_ms: Vec::new(),
             settings,
             frame_ubo,
             gbuffer,
@@ -729,7 +732,9 @@ impl Renderer {
             call: "vkEndCommandBuffer",
             result,
         })?;
+        let start = std::time::Instant::now();
         let submitted = ctx.submit_and_wait(cmd);
+        self.frame_ms.push(start.elapsed().as_secs_f64() * 1e3);
         if let Some(t) = timer.as_mut() {
             t.collect()?;
         }

@@ -381,6 +381,18 @@ impl<'r> PassBuilder<'_, '_, 'r> {
         };
         let r = body(cmd);
         if let (Some(t), Some(scope)) = (g.timer.as_mut(), scope) {
+            // Timing only: wait for this pass's work before its end timestamp, so that a pass's
+            // time is its own (lavapipe otherwise finishes compute work at the next barrier,
+            // outside every scope).
+            let wait = [vk::MemoryBarrier2::default()
+                .src_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)
+                .dst_stage_mask(vk::PipelineStageFlags2::ALL_COMMANDS)];
+            unsafe {
+                device.cmd_pipeline_barrier2(
+                    cmd,
+                    &vk::DependencyInfo::default().memory_barriers(&wait),
+                )
+            };
             t.end(device, cmd, scope);
         }
         unsafe {

@@ -48,8 +48,10 @@ impl PassTimer {
         }
         self.used += 2;
         self.names.push(name.to_string());
+        // ALL_COMMANDS on both ends: the scope starts when earlier work is done and ends when
+        // its own is (lavapipe writes TOP/BOTTOM_OF_PIPE timestamps without waiting for compute).
         unsafe {
-            device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::TOP_OF_PIPE, self.pool, q)
+            device.cmd_write_timestamp2(cmd, vk::PipelineStageFlags2::ALL_COMMANDS, self.pool, q)
         };
         Scope(q)
     }
@@ -61,7 +63,7 @@ impl PassTimer {
         unsafe {
             device.cmd_write_timestamp2(
                 cmd,
-                vk::PipelineStageFlags2::BOTTOM_OF_PIPE,
+                vk::PipelineStageFlags2::ALL_COMMANDS,
                 self.pool,
                 scope.0 + 1,
             )
