@@ -1,7 +1,9 @@
 //! voxgi: real-time global illumination by deferred voxel shading (Villegas and Ramirez, 2016)
 //! on Vulkan.
 
+pub mod metrics;
 pub mod output;
+pub mod reference;
 pub mod render;
 pub mod scene;
 pub mod vk;
