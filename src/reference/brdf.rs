@@ -167,7 +167,7 @@ impl Brdf {
             return None;
         }
         let pdf = self.pdf(wo, wi);
-        if !(pdf > 0.0) || !pdf.is_finite() {
+        if pdf.is_nan() || pdf <= 0.0 || pdf.is_infinite() {
             return None;
         }
         Some((wi, self.eval(wo, wi), pdf))

@@ -352,7 +352,7 @@ fn sah_split(
     let mut best: Option<(f32, usize, usize)> = None;
     for axis in 0..3 {
         let extent = cmax[axis] - cmin[axis];
-        if !(extent > 0.0) {
+        if extent.is_nan() || extent <= 0.0 {
             continue;
         }
         let scale = BINS as f32 / extent;

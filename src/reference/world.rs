@@ -120,7 +120,7 @@ impl<'s> World<'s> {
                 let (a, b, c) = (p(t[0]), p(t[1]), p(t[2]));
                 let g = TriGeom::new(a, b, c);
                 // Degenerate and non-finite triangles can never be hit: leave them out.
-                if !(finite3(a) && finite3(b) && finite3(c)) || !(g.area() > 0.0) {
+                if !(finite3(a) && finite3(b) && finite3(c) && g.area() > 0.0) {
                     continue;
                 }
                 tris.push(g);
@@ -371,7 +371,7 @@ pub fn punctual(light: &Light, p: Vec3) -> Option<(Vec3, f32, Vec3)> {
         LightKind::Point | LightKind::Spot { .. } => {
             let to = light.position - p;
             let d2 = to.length_squared();
-            if !(d2 > 0.0) {
+            if d2.is_nan() || d2 <= 0.0 {
                 return None;
             }
             let d = d2.sqrt();
