@@ -324,6 +324,12 @@ fn reference(args: &Args) -> Result<()> {
     if let Some(spec) = args.value("--sun") {
         scene.lights.push(parse_sun(spec)?);
     }
+    if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.is_emissive()) {
+        eprintln!(
+            "warning: {}: no lights and no emission; the image is black",
+            scene_path.display()
+        );
+    }
     let r = voxgi::reference::render_full(&scene, &settings);
     if r.bad_samples > 0 {
         eprintln!("warning: {} NaN/Inf samples were dropped", r.bad_samples);
