@@ -16,7 +16,8 @@ USAGE:
                [--frames N] [--exposure EV] [--shadow-res N]
                [--validate] [--timings] [--device NAME]
   voxgi info SCENE [--device NAME]
-  voxgi reference [SCENE] --spp N --out FILE.exr [--width W] [--height H] [--seed S] [--sun ...]
+  voxgi reference [SCENE] [--spp N] [--out FILE.exr] [--width W] [--height H] [--seed S]
+                  [--sun EL,AZ[,E]]
   voxgi compare A.exr REFERENCE.exr [--exposure EV]
 
   SCENE        a glTF 2.0 file (.gltf or .glb); render defaults to the bundled Cornell box
@@ -314,6 +315,7 @@ fn reference(args: &Args) -> Result<()> {
         ..Default::default()
     };
     let (w, h, spp) = (settings.width, settings.height, settings.spp);
+    let exposure: f32 = args.number("--exposure", 0.0)?;
     if w == 0 || h == 0 || w > 16384 || h > 16384 {
         bail!("image size {w}x{h} is out of range (1 to 16384)");
     }
@@ -334,7 +336,7 @@ fn reference(args: &Args) -> Result<()> {
     if r.bad_samples > 0 {
         eprintln!("warning: {} NaN/Inf samples were dropped", r.bad_samples);
     }
-    output::save(&r.image, &out, args.number("--exposure", 0.0)?)?;
+    output::save(&r.image, &out, exposure)?;
     eprintln!(
         "wrote {} ({w}x{h}, {spp} spp, {:.2} s)",
         out.display(),

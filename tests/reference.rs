@@ -357,6 +357,84 @@ fn area_light_matches_form_factor_and_emits_from_its_front_only() {
     }
 }
 
+/// Glossy reflection of an area light: the path tracer's MIS of light and BRDF sampling
+/// against a direct quadrature of the BRDF (the renderer's own, evaluated point by point)
+/// over the light, for a rough metal and a rough dielectric.
+#[test]
+fn glossy_reflection_of_an_area_light_matches_quadrature() {
+    use voxgi::reference::brdf::Brdf;
+    let (a, le) = (0.5f32, 2.0f32);
+    let light_centre = Vec3::new(1.0, 1.0, 0.0);
+    let eye = Vec3::new(-1.0, 1.0, 0.0);
+    for (base, metallic, roughness) in [
+        (Vec3::new(0.9, 0.8, 0.7), 1.0, 0.5),
+        (Vec3::new(0.2, 0.5, 0.3), 0.0, 0.3),
+    ] {
+        let mut s = empty_scene();
+        let m = lambert(&mut s, base);
+        let mat = &mut s.materials[m as usize];
+        (mat.metallic, mat.roughness, mat.specular_factor) = (metallic, roughness, 1.0);
+        floor(&mut s, 5.0, m);
+        let e = emitter(&mut s, Vec3::ZERO, Vec3::splat(le), false);
+        let c = light_centre;
+        quad(
+            &mut s,
+            [
+                c + Vec3::new(-a, 0.0, -a),
+                c + Vec3::new(a, 0.0, -a),
+                c + Vec3::new(a, 0.0, a),
+                c + Vec3::new(-a, 0.0, a),
+            ],
+            e,
+        );
+        s.camera = look_at(eye, Vec3::ZERO, Vec3::Y, 0.5);
+        let out = render_full(&s, &settings(4, 4, 4096));
+        let got = out
+            .image
+            .pixels
+            .iter()
+            .map(|p| Vec3::from(*p))
+            .sum::<Vec3>()
+            / 16.0;
+        let sigma = (out
+            .variance
+            .pixels
+            .iter()
+            .map(|v| Vec3::from(*v))
+            .sum::<Vec3>()
+            / 256.0)
+            .powf(0.5);
+
+        // Local frame of the floor: z is +Y.
+        let local = |v: Vec3| Vec3::new(v.x, v.z, v.y);
+        let brdf = Brdf::new(base, metallic, roughness, 1.0, Vec3::ONE);
+        let wo = local(eye.normalize());
+        let n = 400;
+        let cell = (2.0 * a / n as f32).powi(2);
+        let mut want = Vec3::ZERO;
+        for i in 0..n {
+            for j in 0..n {
+                let q = c + Vec3::new(
+                    -a + (i as f32 + 0.5) * 2.0 * a / n as f32,
+                    0.0,
+                    -a + (j as f32 + 0.5) * 2.0 * a / n as f32,
+                );
+                let d2 = q.length_squared();
+                let wi = q / d2.sqrt();
+                // cos at the floor and at the light (which faces down) are both wi.y.
+                want += brdf.eval(wo, local(wi)) * le * wi.y * wi.y / d2 * cell;
+            }
+        }
+        eprintln!("metallic {metallic}: {got} against {want} (sigma {sigma})");
+        for k in 0..3 {
+            assert!(
+                (got[k] - want[k]).abs() < 0.005 * want[k] + 4.0 * sigma[k],
+                "metallic {metallic}: {got} against {want} (sigma {sigma})"
+            );
+        }
+    }
+}
+
 /// Seen directly, emission comes from front faces only (doubleSided: both), and a mirroring
 /// instance transform (negative determinant) flips the winding that decides the front.
 #[test]
