@@ -2,7 +2,9 @@
 //! on Vulkan.
 
 pub mod gi;
+pub mod metrics;
 pub mod output;
+pub mod reference;
 pub mod render;
 pub mod scene;
 pub mod vk;

@@ -17,6 +17,9 @@ USAGE:
                [--frames N] [--exposure EV] [--shadow-res N]
                [--validate] [--timings] [--device NAME]
   voxgi info SCENE [render options]
+  voxgi reference [SCENE] [--spp N] [--out FILE.exr] [--width W] [--height H] [--seed S]
+                  [--sun EL,AZ[,E]]
+  voxgi compare A.exr REFERENCE.exr [--exposure EV]
 
   SCENE        a glTF 2.0 file (.gltf or .glb); render defaults to the bundled Cornell box
   --out FILE   .exr: linear radiance (RGB float); .png: display image (default voxgi.png)
@@ -41,6 +44,8 @@ USAGE:
   --validate   Khronos validation with synchronization validation; any message fails the run
   --timings    print each pass's median GPU time
   --device NAME           use the Vulkan device whose name contains NAME
+  reference    CPU path-traced ground truth (all cores; --spp default 64, --seed default 0)
+  compare      prints one JSON line: relMSE, MAE, RMSE (radiance) and FLIP (display images)
 ";
 
 /// The Cornell box generated into assets/ (see voxgi::scene::builder).
@@ -77,6 +82,8 @@ const VALUED: &[&str] = &[
     "--cones",
     "--aperture",
     "--step",
+    "--spp",
+    "--seed",
 ];
 
 impl Args {
@@ -419,6 +426,72 @@ fn info(args: &Args) -> Result<()> {
     Ok(())
 }
 
+/// `voxgi reference`: the CPU path tracer (src/reference) on the same scene `render` builds.
+fn reference(args: &Args) -> Result<()> {
+    let scene_path = match args.positional.as_slice() {
+        [] => default_scene(),
+        [s] => PathBuf::from(s),
+        more => bail!("reference takes one scene, got {}", more.len()),
+    };
+    let out = PathBuf::from(args.value("--out").unwrap_or("reference.exr"));
+    let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("");
+    if !ext.eq_ignore_ascii_case("exr") && !ext.eq_ignore_ascii_case("png") {
+        bail!("{}: unsupported output format (use .exr)", out.display());
+    }
+    let settings = voxgi::reference::ReferenceSettings {
+        width: args.number("--width", 512)?,
+        height: args.number("--height", 512)?,
+        spp: args.number("--spp", 64)?,
+        seed: args.number("--seed", 0)?,
+        progress: true,
+        ..Default::default()
+    };
+    let (w, h, spp) = (settings.width, settings.height, settings.spp);
+    let exposure: f32 = args.number("--exposure", 0.0)?;
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        bail!("image size {w}x{h} is out of range (1 to 16384)");
+    }
+    if !(1..=1 << 20).contains(&spp) {
+        bail!("--spp {spp} is out of range (1 to 1048576)");
+    }
+    let mut scene = load_scene(&scene_path)?;
+    if let Some(spec) = args.value("--sun") {
+        scene.lights.push(parse_sun(spec)?);
+    }
+    if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.is_emissive()) {
+        eprintln!(
+            "warning: {}: no lights and no emission; the image is black",
+            scene_path.display()
+        );
+    }
+    let r = voxgi::reference::render_full(&scene, &settings);
+    if r.bad_samples > 0 {
+        eprintln!("warning: {} NaN/Inf samples were dropped", r.bad_samples);
+    }
+    output::save(&r.image, &out, exposure)?;
+    eprintln!(
+        "wrote {} ({w}x{h}, {spp} spp, {:.2} s)",
+        out.display(),
+        r.seconds
+    );
+    Ok(())
+}
+
+/// `voxgi compare A B`: B is the reference.
+fn compare(args: &Args) -> Result<()> {
+    let [pa, pb] = args.positional.as_slice() else {
+        bail!("compare takes two images, A.exr and REFERENCE.exr\n\n{USAGE}");
+    };
+    let (a, b) = (
+        output::load_exr(Path::new(pa))?,
+        output::load_exr(Path::new(pb))?,
+    );
+    let m = voxgi::metrics::try_compare(&a, &b, args.number("--exposure", 0.0)?)
+        .with_context(|| format!("{pa} against {pb}"))?;
+    println!("{}", m.to_json());
+    Ok(())
+}
+
 fn run() -> Result<()> {
     let argv: Vec<String> = std::env::args().skip(1).collect();
     let Some(cmd) = argv.first() else {
@@ -433,6 +506,8 @@ fn run() -> Result<()> {
     match cmd.as_str() {
         "render" => render(&args),
         "info" => info(&args),
+        "reference" => reference(&args),
+        "compare" => compare(&args),
         "--help" | "-h" | "help" => {
             print!("{USAGE}");
             Ok(())

@@ -1,0 +1,379 @@
+//! The ground-truth reference: a CPU path tracer over the same loaded [`Scene`] that follows
+//! `../shared/CONVENTIONS.md` exactly, written apart from the real-time path (src/render and
+//! glsl/) so that it can judge it.
+//!
+//! Unidirectional path tracing with next-event estimation: punctual lights are sampled
+//! directly; emissive triangles are sampled by area in proportion to their power and combined
+//! with BRDF sampling by multiple importance sampling (power heuristic). Paths end by Russian
+//! roulette. The background is black. Each pixel is the mean of samples jittered over its
+//! footprint; every pixel has its own random stream derived from the seed and its index, so a
+//! seed gives the same image bit for bit whatever the number of threads.
+
+pub mod brdf;
+pub mod bvh;
+pub mod sampling;
+pub mod texture;
+pub mod world;
+
+use crate::output::RadianceImage;
+use crate::scene::Scene;
+use glam::Vec3;
+use rayon::prelude::*;
+use sampling::{power_heuristic, Frame, Pcg32};
+use std::io::{IsTerminal, Write};
+use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
+use std::sync::Mutex;
+use std::time::{Duration, Instant};
+use world::{punctual, World};
+
+#[derive(Clone, Debug)]
+pub struct ReferenceSettings {
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    pub seed: u64,
+    /// A hard cap on path length (bounces), far beyond where Russian roulette ends paths;
+    /// it only guards against endless paths in closed scenes of albedo 1.
+    pub max_depth: u32,
+    /// Bounces before Russian roulette starts.
+    pub rr_depth: u32,
+    /// A progress bar on stderr (only drawn when stderr is a terminal).
+    pub progress: bool,
+}
+
+impl Default for ReferenceSettings {
+    fn default() -> Self {
+        ReferenceSettings {
+            width: 512,
+            height: 512,
+            spp: 64,
+            seed: 0,
+            max_depth: 1024,
+            rr_depth: 3,
+            progress: false,
+        }
+    }
+}
+
+/// A finished render: the image, and what tells how far it is from converged.
+#[derive(Clone, Debug)]
+pub struct ReferenceOutput {
+    pub image: RadianceImage,
+    /// Per pixel and channel: the estimated variance of the pixel's mean (sample variance / spp).
+    pub variance: RadianceImage,
+    /// Samples dropped because they came out NaN or infinite (should stay 0).
+    pub bad_samples: u64,
+    pub seconds: f64,
+}
+
+/// Renders the scene's camera view: linear radiance per pixel.
+pub fn render(scene: &Scene, settings: &ReferenceSettings) -> RadianceImage {
+    render_full(scene, settings).image
+}
+
+/// `render` with the per-pixel variance estimate and statistics.
+pub fn render_full(scene: &Scene, settings: &ReferenceSettings) -> ReferenceOutput {
+    let start = Instant::now();
+    let (w, h) = (settings.width.max(1), settings.height.max(1));
+    let spp = settings.spp.max(1);
+    let world = World::new(scene);
+    let camera = CameraRays::new(scene, w, h);
+    let bad = AtomicU64::new(0);
+    let progress = Progress::new(settings.progress && std::io::stderr().is_terminal(), h);
+    let mut rows: Vec<Vec<([f32; 3], [f32; 3])>> = vec![Vec::new(); h as usize];
+    rows.par_iter_mut().enumerate().for_each(|(y, row)| {
+        *row = (0..w)
+            .map(|x| {
+                let pixel = y as u64 * w as u64 + x as u64;
+                let mut rng = Pcg32::for_pixel(settings.seed, pixel);
+                let (mut sum, mut sum2) = ([0f64; 3], [0f64; 3]);
+                for _ in 0..spp {
+                    let j = rng.next_2d();
+                    let d = camera.direction(x as f32 + j.x, y as f32 + j.y);
+                    let l = trace(&world, camera.eye, d, &mut rng, settings);
+                    if !l.is_finite() {
+                        bad.fetch_add(1, Ordering::Relaxed);
+                        continue;
+                    }
+                    for c in 0..3 {
+                        sum[c] += l[c] as f64;
+                        sum2[c] += (l[c] as f64) * (l[c] as f64);
+                    }
+                }
+                let n = spp as f64;
+                let mean = sum.map(|s| s / n);
+                let var = std::array::from_fn(|c| {
+                    if spp > 1 {
+                        ((sum2[c] / n - mean[c] * mean[c]).max(0.0) / (n - 1.0)) as f32
+                    } else {
+                        0.0
+                    }
+                });
+                (mean.map(|m| m as f32), var)
+            })
+            .collect();
+        progress.row_done();
+    });
+    progress.finish();
+    let (pixels, variance) = rows.into_iter().flatten().unzip();
+    ReferenceOutput {
+        image: RadianceImage {
+            width: w,
+            height: h,
+            pixels,
+        },
+        variance: RadianceImage {
+            width: w,
+            height: h,
+            pixels: variance,
+        },
+        bad_samples: bad.into_inner(),
+        seconds: start.elapsed().as_secs_f64(),
+    }
+}
+
+/// Primary rays of the scene camera (perspective, yfov, aspect = width / height).
+struct CameraRays {
+    eye: Vec3,
+    right: Vec3,
+    up: Vec3,
+    forward: Vec3,
+    tan_half: f32,
+    aspect: f32,
+    w: f32,
+    h: f32,
+}
+
+impl CameraRays {
+    fn new(scene: &Scene, w: u32, h: u32) -> Self {
+        let c = &scene.camera;
+        let m = c.world;
+        CameraRays {
+            eye: c.eye(),
+            right: m.transform_vector3(Vec3::X).normalize_or(Vec3::X),
+            up: m.transform_vector3(Vec3::Y).normalize_or(Vec3::Y),
+            forward: m.transform_vector3(Vec3::NEG_Z).normalize_or(Vec3::NEG_Z),
+            tan_half: (c.yfov * 0.5).tan(),
+            aspect: w as f32 / h as f32,
+            w: w as f32,
+            h: h as f32,
+        }
+    }
+
+    /// The unit direction through image position (x, y) in pixels (0, 0 = top left corner).
+    fn direction(&self, x: f32, y: f32) -> Vec3 {
+        let sx = (x / self.w * 2.0 - 1.0) * self.tan_half * self.aspect;
+        let sy = (1.0 - y / self.h * 2.0) * self.tan_half;
+        (self.forward + self.right * sx + self.up * sy).normalize()
+    }
+}
+
+/// Moves a ray origin off the surface along the geometric normal by a few float ulps of its
+/// coordinates (the integer-offset idea of Waechter and Binder, Ray Tracing Gems ch. 6), so
+/// the offset scales with the position's magnitude instead of a scene-size epsilon.
+fn offset_origin(p: Vec3, n: Vec3) -> Vec3 {
+    const NEAR_ORIGIN: f32 = 1.0 / 32.0;
+    const FLOAT_SCALE: f32 = 1.0 / 65536.0;
+    const INT_SCALE: f32 = 256.0;
+    let f = |p: f32, n: f32| -> f32 {
+        if p.abs() < NEAR_ORIGIN {
+            return p + FLOAT_SCALE * n;
+        }
+        let ulps = (INT_SCALE * n) as i32;
+        // Moving the bit pattern away from zero grows |p|; towards zero shrinks it.
+        let ulps = if p < 0.0 { -ulps } else { ulps };
+        f32::from_bits((p.to_bits() as i32).wrapping_add(ulps) as u32)
+    };
+    Vec3::new(f(p.x, n.x), f(p.y, n.y), f(p.z, n.z))
+}
+
+/// One path from the camera: the radiance it carries back.
+fn trace(world: &World, eye: Vec3, dir: Vec3, rng: &mut Pcg32, s: &ReferenceSettings) -> Vec3 {
+    let mut l = Vec3::ZERO;
+    let mut beta = Vec3::ONE;
+    let (mut o, mut d) = (eye, dir);
+    // Density (solid angle) of the BRDF sample that made the current ray; 0 for camera rays,
+    // whose emission hits are not also reachable by light sampling.
+    let mut bsdf_pdf = 0.0f32;
+    for depth in 0..s.max_depth.max(1) {
+        let Some(hit) = world.intersect(o, d, f32::INFINITY) else {
+            break;
+        };
+        let wo = -d;
+        let surf = world.surface(&hit, wo);
+        let le = world.emission(surf.tri, surf.uv, surf.front);
+        if le != Vec3::ZERO {
+            let weight = if bsdf_pdf > 0.0 {
+                let cos_light = surf.ng.dot(wo).abs();
+                let light_pdf = world.emitter_pdf_area(surf.tri) * hit.t * hit.t / cos_light;
+                power_heuristic(bsdf_pdf, light_pdf)
+            } else {
+                1.0
+            };
+            l += beta * le * weight;
+        }
+        let brdf = world.brdf(&surf);
+        let frame = Frame::new(surf.ns);
+        let wo_local = frame.to_local(wo);
+        let origin = offset_origin(surf.p, surf.ng);
+
+        for light in &world.lights {
+            let Some((wi, dist, irradiance)) = punctual(light, surf.p) else {
+                continue;
+            };
+            if surf.ng.dot(wi) <= 0.0 {
+                continue;
+            }
+            let wi_local = frame.to_local(wi);
+            let f = brdf.eval(wo_local, wi_local);
+            if f == Vec3::ZERO {
+                continue;
+            }
+            let tmax = if dist.is_finite() {
+                (light.position - origin).length() * (1.0 - 1e-5)
+            } else {
+                f32::INFINITY
+            };
+            if !world.occluded(origin, wi, tmax) {
+                l += beta * f * wi_local.z * irradiance;
+            }
+        }
+
+        if world.has_emitters() {
+            let u_pick = rng.next_f32();
+            let u = rng.next_2d();
+            if let Some(e) = world.sample_emitter(u_pick, u) {
+                let to = e.p - surf.p;
+                let d2 = to.length_squared();
+                let wi = to / d2.sqrt();
+                let cos_light = e.n_front.dot(-wi);
+                let le = world.emission(e.tri, e.uv, cos_light > 0.0);
+                if le != Vec3::ZERO && surf.ng.dot(wi) > 0.0 && d2 > 0.0 {
+                    let wi_local = frame.to_local(wi);
+                    let f = brdf.eval(wo_local, wi_local);
+                    let light_pdf = e.pdf_area * d2 / cos_light.abs();
+                    if f != Vec3::ZERO && light_pdf > 0.0 && light_pdf.is_finite() {
+                        let target = offset_origin(
+                            e.p,
+                            if cos_light > 0.0 {
+                                e.n_front
+                            } else {
+                                -e.n_front
+                            },
+                        );
+                        if !world.occluded(origin, target - origin, 1.0 - 1e-4) {
+                            let weight = power_heuristic(light_pdf, brdf.pdf(wo_local, wi_local));
+                            l += beta * f * wi_local.z * le * weight / light_pdf;
+                        }
+                    }
+                }
+            }
+        }
+
+        let u_lobe = rng.next_f32();
+        let u = rng.next_2d();
+        let Some((wi_local, f, pdf)) = brdf.sample(wo_local, u_lobe, u) else {
+            break;
+        };
+        let wi = frame.to_world(wi_local);
+        // Directions under the geometric surface would leak through it.
+        if surf.ng.dot(wi) <= 0.0 {
+            break;
+        }
+        beta *= f * wi_local.z / pdf;
+        bsdf_pdf = pdf;
+        if depth + 1 >= s.rr_depth {
+            let q = beta.max_element().min(0.95);
+            if q.is_nan() || q <= 0.0 || rng.next_f32() >= q {
+                break;
+            }
+            beta /= q;
+        }
+        o = origin;
+        d = wi;
+    }
+    l
+}
+
+/// A progress bar on stderr, redrawn at most a few times a second.
+struct Progress {
+    enabled: bool,
+    total: u32,
+    done: AtomicUsize,
+    start: Instant,
+    last: Mutex<Instant>,
+}
+
+impl Progress {
+    fn new(enabled: bool, total: u32) -> Self {
+        let now = Instant::now();
+        Progress {
+            enabled,
+            total,
+            done: AtomicUsize::new(0),
+            start: now,
+            last: Mutex::new(now),
+        }
+    }
+
+    fn row_done(&self) {
+        let done = self.done.fetch_add(1, Ordering::Relaxed) + 1;
+        if !self.enabled {
+            return;
+        }
+        let Ok(mut last) = self.last.try_lock() else {
+            return;
+        };
+        if last.elapsed() < Duration::from_millis(200) {
+            return;
+        }
+        *last = Instant::now();
+        self.draw(done);
+    }
+
+    fn draw(&self, done: usize) {
+        let frac = done as f64 / self.total.max(1) as f64;
+        let elapsed = self.start.elapsed().as_secs_f64();
+        let left = if frac > 0.0 {
+            elapsed / frac - elapsed
+        } else {
+            0.0
+        };
+        let filled = (frac * 40.0) as usize;
+        let mut err = std::io::stderr().lock();
+        let _ = write!(
+            err,
+            "\r[{}{}] {:5.1}%  {:.1} s, {:.0} s left ",
+            "#".repeat(filled),
+            ".".repeat(40 - filled.min(40)),
+            frac * 100.0,
+            elapsed,
+            left
+        );
+        let _ = err.flush();
+    }
+
+    fn finish(&self) {
+        if self.enabled {
+            self.draw(self.total as usize);
+            eprintln!();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn offset_moves_off_the_plane_on_the_normal_side() {
+        for p in [Vec3::ZERO, Vec3::new(100.0, -3.0, 0.01), Vec3::splat(-7.5)] {
+            for n in [Vec3::Y, Vec3::NEG_Y, Vec3::new(0.6, 0.0, -0.8)] {
+                let q = offset_origin(p, n);
+                assert!((q - p).dot(n) > 0.0, "{p} {n} {q}");
+                assert!((q - p).length() < 4e-5 * (1.0 + p.abs().max_element()));
+            }
+        }
+    }
+}

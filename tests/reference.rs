@@ -1,0 +1,746 @@
+//! The reference path tracer against answers known in closed form: a furnace, punctual lights
+//! over a Lambertian plane, an area light's form factor; alpha masks, front-face emission;
+//! reproducibility and noise that matches its own variance estimate; the command line.
+//! CPU only: no Vulkan device is used.
+
+mod common;
+mod gpu;
+use glam::{Mat4, Vec3};
+use gpu::{empty_scene, floor, lambert, light, quad, top_camera};
+use std::f32::consts::PI;
+use std::path::PathBuf;
+use std::process::Command;
+use voxgi::output::RadianceImage;
+use voxgi::reference::{render, render_full, ReferenceOutput, ReferenceSettings};
+use voxgi::scene::*;
+
+fn settings(w: u32, h: u32, spp: u32) -> ReferenceSettings {
+    ReferenceSettings {
+        width: w,
+        height: h,
+        spp,
+        seed: 1,
+        ..Default::default()
+    }
+}
+
+/// Emissive material: Lambertian `albedo` that also emits `le` from its front faces.
+fn emitter(s: &mut Scene, albedo: Vec3, le: Vec3, double_sided: bool) -> u32 {
+    let m = lambert(s, albedo);
+    s.materials[m as usize].emissive = le;
+    s.materials[m as usize].double_sided = double_sided;
+    m
+}
+
+/// A closed sphere of flat triangles whose front faces (winding and normals) point inwards.
+fn inward_sphere(s: &mut Scene, radius: f32, material: u32) {
+    let (stacks, slices) = (12, 24);
+    let at = |i: u32, j: u32| {
+        let th = PI * i as f32 / stacks as f32;
+        let ph = 2.0 * PI * j as f32 / slices as f32;
+        Vec3::new(th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin()) * radius
+    };
+    let first = s.indices.len() as u32;
+    let mut bounds = Aabb::EMPTY;
+    let mut tri = |s: &mut Scene, a: Vec3, b: Vec3, c: Vec3| {
+        let mut n = (b - a).cross(c - a);
+        if n.length() < 1e-9 {
+            return;
+        }
+        // Wind every triangle so that its front faces the centre.
+        let (b, c) = if n.dot(a + b + c) > 0.0 {
+            n = -n;
+            (c, b)
+        } else {
+            (b, c)
+        };
+        let n = n.normalize();
+        let base = s.vertices.len() as u32;
+        for p in [a, b, c] {
+            bounds.extend(p);
+            let t = (b - a).normalize();
+            s.vertices.push(Vertex {
+                position: p.to_array(),
+                normal: n.to_array(),
+                uv: [0.0, 0.0],
+                tangent: [t.x, t.y, t.z, 1.0],
+            });
+        }
+        s.indices.extend([base, base + 1, base + 2]);
+    };
+    for i in 0..stacks {
+        for j in 0..slices {
+            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+            tri(s, a, b, c);
+            tri(s, a, c, d);
+        }
+    }
+    let count = s.indices.len() as u32 - first;
+    s.primitives.push(Primitive {
+        first_index: first,
+        index_count: count,
+        material,
+        bounds,
+    });
+    s.instances.push(Instance {
+        primitive: s.primitives.len() as u32 - 1,
+        node: s.instances.len(),
+        node_name: None,
+        world: Mat4::IDENTITY,
+    });
+    s.bounds = s.bounds.union(&bounds);
+}
+
+fn look_at(eye: Vec3, target: Vec3, up: Vec3, yfov_deg: f32) -> Camera {
+    Camera {
+        name: None,
+        world: Mat4::look_at_rh(eye, target, up).inverse(),
+        yfov: yfov_deg.to_radians(),
+        znear: 0.01,
+        zfar: 100.0,
+        is_default: false,
+    }
+}
+
+/// A closed Lambertian sphere of albedo a emitting Le inside: radiance is Le / (1 - a)
+/// everywhere (all orders of bounces, so Russian roulette and MIS must both be unbiased).
+#[test]
+fn furnace_converges_to_le_over_one_minus_albedo() {
+    let mut s = empty_scene();
+    let albedo = Vec3::new(0.3, 0.5, 0.7);
+    let le = Vec3::new(1.0, 0.8, 0.6);
+    let m = emitter(&mut s, albedo, le, false);
+    inward_sphere(&mut s, 1.0, m);
+    s.camera = look_at(
+        Vec3::new(0.1, 0.2, 0.0),
+        Vec3::new(1.0, 0.0, 0.3),
+        Vec3::Y,
+        90.0,
+    );
+    // Russian roulette from the 8th bounce: its variance on a geometric series of ratio 0.7
+    // would otherwise need far more samples for 1% per pixel.
+    let st = ReferenceSettings {
+        rr_depth: 8,
+        ..settings(4, 4, 32768)
+    };
+    let out = render_full(&s, &st);
+    assert_eq!(out.bad_samples, 0);
+    let want = le / (Vec3::ONE - albedo);
+    let (mut worst, mut worst_sigma) = (0.0f32, 0.0f32);
+    for (i, (p, v)) in out
+        .image
+        .pixels
+        .iter()
+        .zip(&out.variance.pixels)
+        .enumerate()
+    {
+        for c in 0..3 {
+            let rel = (p[c] - want[c]).abs() / want[c];
+            worst = worst.max(rel);
+            worst_sigma = worst_sigma.max(v[c].sqrt() / want[c]);
+            assert!(
+                rel < 0.01,
+                "pixel {i} channel {c}: {} against {} (sigma {:.4})",
+                p[c],
+                want[c],
+                v[c].sqrt()
+            );
+        }
+    }
+    eprintln!(
+        "furnace: worst relative error {:.3}%, largest sigma {:.3}%",
+        worst * 100.0,
+        worst_sigma * 100.0
+    );
+}
+
+/// World point seen through image position (fx, fy) in pixels on the plane y = 0, for
+/// `top_camera(height, fov)` at W x W.
+fn floor_point(fx: f32, fy: f32, w: u32, height: f32, fov_deg: f32) -> Vec3 {
+    let t = (fov_deg.to_radians() * 0.5).tan();
+    let nx = fx / w as f32 * 2.0 - 1.0;
+    let ny = 1.0 - fy / w as f32 * 2.0;
+    Vec3::new(nx * t * height, 0.0, -ny * t * height)
+}
+
+const W: u32 = 32;
+const CAM_H: f32 = 4.0;
+const FOV: f32 = 60.0;
+
+/// Compares each pixel with the mean of `radiance` over its footprint (8 x 8 points), where
+/// the expected value is above 1e-3; returns how many pixels were checked. The samples are
+/// jittered over the footprint, so a pixel may differ from the mean by its own noise: the
+/// allowance is 6 sigma (from the render's variance estimate) plus `tolerance`.
+fn check_footprints(
+    out: &ReferenceOutput,
+    tolerance: f32,
+    mut radiance: impl FnMut(Vec3) -> Option<Vec3>,
+) -> usize {
+    let img = &out.image;
+    let mut checked = 0;
+    let (mut worst, mut worst_z) = (0.0f32, 0.0f32);
+    for y in 0..W {
+        'pixels: for x in 0..W {
+            let mut want = Vec3::ZERO;
+            for k in 0..64 {
+                let (sx, sy) = ((k % 8) as f32 + 0.5, (k / 8) as f32 + 0.5);
+                let p = floor_point(x as f32 + sx / 8.0, y as f32 + sy / 8.0, W, CAM_H, FOV);
+                let Some(r) = radiance(p) else {
+                    continue 'pixels;
+                };
+                want += r / 64.0;
+            }
+            let got = Vec3::from(img.at(x, y));
+            let sigma = Vec3::from(out.variance.at(x, y)).powf(0.5);
+            for c in 0..3 {
+                if want[c] > 1e-3 {
+                    let err = (got[c] - want[c]).abs();
+                    worst = worst.max(err / want[c]);
+                    worst_z = worst_z.max(err / sigma[c].max(1e-12));
+                    let allowed = 6.0 * sigma[c] + tolerance * want[c];
+                    assert!(
+                        err <= allowed,
+                        "pixel ({x},{y}): got {got}, want {want} ({:.2}% off, sigma {:.2}%)",
+                        err / want[c] * 100.0,
+                        sigma[c] / want[c] * 100.0
+                    );
+                }
+            }
+            checked += 1;
+        }
+    }
+    eprintln!(
+        "checked {checked} pixels, worst {:.3}% and {worst_z:.1} sigma",
+        worst * 100.0
+    );
+    checked
+}
+
+/// The same case as tests/direct_light.rs: with the plane the only surface, next-event
+/// estimation of a point light is exact and only the pixel footprint varies.
+#[test]
+fn point_light_over_lambertian_plane() {
+    let mut s = empty_scene();
+    let albedo = Vec3::new(0.8, 0.5, 0.25);
+    let m = lambert(&mut s, albedo);
+    floor(&mut s, 3.0, m);
+    top_camera(&mut s, CAM_H, FOV);
+    let lp = Vec3::new(0.4, 1.5, -0.3);
+    let i = Vec3::new(10.0, 20.0, 30.0);
+    s.lights.push(light(LightKind::Point, i, lp, Vec3::NEG_Y));
+    // The radiance varies across the footprint: enough samples to average it well.
+    let img = render_full(&s, &settings(W, W, 1024));
+    let sigma = img
+        .variance
+        .pixels
+        .iter()
+        .map(|v| v[0].sqrt())
+        .fold(0.0, f32::max);
+    assert!(sigma < 0.002, "footprint noise {sigma}");
+    let n = check_footprints(&img, 0.001, |p| {
+        let d = lp - p;
+        Some(albedo / PI * i * (d.y / d.length()) / d.length_squared())
+    });
+    assert!(n > (W * W / 2) as usize, "only {n} pixels checked");
+}
+
+#[test]
+fn directional_light_over_lambertian_plane() {
+    let mut s = empty_scene();
+    let albedo = Vec3::new(0.3, 0.6, 0.9);
+    let m = lambert(&mut s, albedo);
+    floor(&mut s, 3.0, m);
+    top_camera(&mut s, CAM_H, FOV);
+    let dir = Vec3::new(0.3, -1.0, 0.5).normalize();
+    let e = Vec3::new(2.0, 3.0, 4.0);
+    s.lights
+        .push(light(LightKind::Directional, e, Vec3::ZERO, dir));
+    let img = render_full(&s, &settings(W, W, 4));
+    let n = check_footprints(&img, 1e-4, |_| Some(albedo / PI * e * -dir.y));
+    assert!(n > (W * W / 2) as usize);
+}
+
+/// glTF's smooth spot falloff clamp(cd scale + offset, 0, 1)^2 and the range window
+/// clamp(1 - (d / range)^4, 0, 1)^2.
+#[test]
+fn spot_light_falloff_and_range_window() {
+    let mut s = empty_scene();
+    let albedo = Vec3::splat(0.7);
+    let m = lambert(&mut s, albedo);
+    floor(&mut s, 3.0, m);
+    top_camera(&mut s, CAM_H, FOV);
+    let lp = Vec3::new(0.0, 2.0, 0.0);
+    let dir = Vec3::new(0.2, -1.0, 0.1).normalize();
+    let (inner, outer) = (20f32.to_radians(), 35f32.to_radians());
+    let i = Vec3::splat(40.0);
+    let range = 2.6;
+    let mut spot = light(
+        LightKind::Spot {
+            inner_cone: inner,
+            outer_cone: outer,
+        },
+        i,
+        lp,
+        dir,
+    );
+    spot.range = Some(range);
+    s.lights.push(spot);
+    let img = render_full(&s, &settings(W, W, 1024));
+    let scale = 1.0 / (inner.cos() - outer.cos());
+    let offset = -outer.cos() * scale;
+    let (mut in_falloff, mut in_window) = (0, 0);
+    let n = check_footprints(&img, 0.001, |p| {
+        let d = lp - p;
+        let l = d.normalize();
+        let a = (dir.dot(-l) * scale + offset).clamp(0.0, 1.0);
+        let win = (1.0 - (d.length() / range).powi(4)).clamp(0.0, 1.0);
+        // Skip where either factor nears zero (relative error means nothing there).
+        if a < 0.1 || win < 0.1 {
+            return None;
+        }
+        in_falloff += (a < 0.9) as usize;
+        in_window += (win < 0.9) as usize;
+        Some(albedo / PI * i * a * a * win * win * l.y / d.length_squared())
+    });
+    assert!(
+        n > 50 && in_falloff > 300 && in_window > 300,
+        "{n} pixels, {in_falloff} / {in_window} samples in the falloff / window"
+    );
+}
+
+/// Irradiance at a point under the centre of a parallel square of half-side `a` at height
+/// `h` emitting `le`: four corner rectangles, each with the closed-form point-to-rectangle
+/// form factor.
+fn square_light_irradiance(a: f32, h: f32, le: f32) -> f32 {
+    let x = a / h;
+    let s = (1.0 + x * x).sqrt();
+    let f = (x / s * (x / s).atan() * 2.0) / (2.0 * PI);
+    4.0 * PI * le * f
+}
+
+/// An emissive square over a Lambertian floor: light sampling, BRDF sampling and their MIS
+/// add up to the analytic form factor; turned to face away, it lights nothing.
+#[test]
+fn area_light_matches_form_factor_and_emits_from_its_front_only() {
+    let (a, h, le, albedo) = (1.0f32, 1.0f32, 2.0f32, 0.5f32);
+    for facing_down in [true, false] {
+        let mut s = empty_scene();
+        let m = lambert(&mut s, Vec3::splat(albedo));
+        floor(&mut s, 5.0, m);
+        let e = emitter(&mut s, Vec3::ZERO, Vec3::splat(le), false);
+        let mut c = [
+            Vec3::new(-a, h, -a),
+            Vec3::new(a, h, -a),
+            Vec3::new(a, h, a),
+            Vec3::new(-a, h, a),
+        ];
+        if !facing_down {
+            c.reverse();
+        }
+        quad(&mut s, c, e);
+        // A narrow view of the floor's centre from below the light.
+        s.camera = look_at(Vec3::new(0.0, 0.5, 0.0), Vec3::ZERO, Vec3::NEG_Z, 2.0);
+        let out = render_full(&s, &settings(4, 4, 4096));
+        let mean: f32 = out.image.pixels.iter().map(|p| p[1]).sum::<f32>() / 16.0;
+        if facing_down {
+            let want = albedo / PI * square_light_irradiance(a, h, le);
+            let sigma = (out.variance.pixels.iter().map(|v| v[1]).sum::<f32>() / 256.0).sqrt();
+            // 1% is about 6 sigma here.
+            eprintln!("area light: {mean} against {want} (sigma of the mean {sigma})");
+            assert!(
+                (mean - want).abs() < 0.01 * want,
+                "{mean} against {want} (sigma {sigma})"
+            );
+        } else {
+            assert_eq!(mean, 0.0, "a light facing away lit the floor");
+        }
+    }
+}
+
+/// Glossy reflection of an area light: the path tracer's MIS of light and BRDF sampling
+/// against a direct quadrature of the BRDF (the renderer's own, evaluated point by point)
+/// over the light, for a rough metal and a rough dielectric.
+#[test]
+fn glossy_reflection_of_an_area_light_matches_quadrature() {
+    use voxgi::reference::brdf::Brdf;
+    let (a, le) = (0.5f32, 2.0f32);
+    let light_centre = Vec3::new(1.0, 1.0, 0.0);
+    let eye = Vec3::new(-1.0, 1.0, 0.0);
+    for (base, metallic, roughness) in [
+        (Vec3::new(0.9, 0.8, 0.7), 1.0, 0.5),
+        (Vec3::new(0.2, 0.5, 0.3), 0.0, 0.3),
+    ] {
+        let mut s = empty_scene();
+        let m = lambert(&mut s, base);
+        let mat = &mut s.materials[m as usize];
+        (mat.metallic, mat.roughness, mat.specular_factor) = (metallic, roughness, 1.0);
+        floor(&mut s, 5.0, m);
+        let e = emitter(&mut s, Vec3::ZERO, Vec3::splat(le), false);
+        let c = light_centre;
+        quad(
+            &mut s,
+            [
+                c + Vec3::new(-a, 0.0, -a),
+                c + Vec3::new(a, 0.0, -a),
+                c + Vec3::new(a, 0.0, a),
+                c + Vec3::new(-a, 0.0, a),
+            ],
+            e,
+        );
+        s.camera = look_at(eye, Vec3::ZERO, Vec3::Y, 0.5);
+        let out = render_full(&s, &settings(4, 4, 4096));
+        let got = out
+            .image
+            .pixels
+            .iter()
+            .map(|p| Vec3::from(*p))
+            .sum::<Vec3>()
+            / 16.0;
+        let sigma = (out
+            .variance
+            .pixels
+            .iter()
+            .map(|v| Vec3::from(*v))
+            .sum::<Vec3>()
+            / 256.0)
+            .powf(0.5);
+
+        // Local frame of the floor: z is +Y.
+        let local = |v: Vec3| Vec3::new(v.x, v.z, v.y);
+        let brdf = Brdf::new(base, metallic, roughness, 1.0, Vec3::ONE);
+        let wo = local(eye.normalize());
+        let n = 400;
+        let cell = (2.0 * a / n as f32).powi(2);
+        let mut want = Vec3::ZERO;
+        for i in 0..n {
+            for j in 0..n {
+                let q = c + Vec3::new(
+                    -a + (i as f32 + 0.5) * 2.0 * a / n as f32,
+                    0.0,
+                    -a + (j as f32 + 0.5) * 2.0 * a / n as f32,
+                );
+                let d2 = q.length_squared();
+                let wi = q / d2.sqrt();
+                // cos at the floor and at the light (which faces down) are both wi.y.
+                want += brdf.eval(wo, local(wi)) * le * wi.y * wi.y / d2 * cell;
+            }
+        }
+        eprintln!("metallic {metallic}: {got} against {want} (sigma {sigma})");
+        for k in 0..3 {
+            assert!(
+                (got[k] - want[k]).abs() < 0.005 * want[k] + 4.0 * sigma[k],
+                "metallic {metallic}: {got} against {want} (sigma {sigma})"
+            );
+        }
+    }
+}
+
+/// Seen directly, emission comes from front faces only (doubleSided: both), and a mirroring
+/// instance transform (negative determinant) flips the winding that decides the front.
+#[test]
+fn emission_from_front_faces_only() {
+    let le = Vec3::new(3.0, 2.0, 1.0);
+    let mut s = empty_scene();
+    let one = emitter(&mut s, Vec3::ZERO, le, false);
+    let two = emitter(&mut s, Vec3::ZERO, le, true);
+    // Five unit quads in a row at z = 0; the camera looks at them along -Z.
+    let square = |x: f32, toward_camera: bool| {
+        let mut c = [
+            Vec3::new(x - 0.4, -0.4, 0.0),
+            Vec3::new(x + 0.4, -0.4, 0.0),
+            Vec3::new(x + 0.4, 0.4, 0.0),
+            Vec3::new(x - 0.4, 0.4, 0.0),
+        ];
+        if !toward_camera {
+            c.reverse();
+        }
+        c
+    };
+    quad(&mut s, square(-2.0, true), one); // front towards the camera: emits
+    quad(&mut s, square(-1.0, false), one); // back towards the camera: black
+    quad(&mut s, square(0.0, false), two); // back, but double-sided: emits
+                                           // Wound away from the camera in object space, mirrored through z = 0 by its instance:
+                                           // the front now faces the camera, though its world-space winding still faces away.
+    quad(&mut s, square(1.0, false), one);
+    s.instances.last_mut().unwrap().world = Mat4::from_scale(Vec3::new(1.0, 1.0, -1.0));
+    // Wound towards the camera and mirrored: its front faces away.
+    quad(&mut s, square(2.0, true), one);
+    s.instances.last_mut().unwrap().world = Mat4::from_scale(Vec3::new(1.0, 1.0, -1.0));
+    s.camera = Camera {
+        name: None,
+        world: Mat4::from_translation(Vec3::new(0.0, 0.0, 10.0)),
+        yfov: 2.0 * (0.5f32 / 10.0).atan(),
+        znear: 0.1,
+        zfar: 100.0,
+        is_default: false,
+    };
+    // 5 units wide, 1 high: 10 pixels per unit, quad centres at x = 5, 15, 25, 35, 45.
+    let img = render(&s, &settings(50, 10, 4));
+    let expect = [le, Vec3::ZERO, le, le, Vec3::ZERO];
+    for (k, want) in expect.iter().enumerate() {
+        for (x, y) in [(5 + 10 * k as u32, 5), (3 + 10 * k as u32, 3)] {
+            let got = Vec3::from(img.at(x, y));
+            assert_eq!(got, *want, "quad {k} at pixel ({x},{y})");
+        }
+    }
+}
+
+/// alphaMode MASK: where alpha is below the cutoff the surface is not there, neither for the
+/// camera nor for shadow rays; where it is above, it is opaque.
+#[test]
+fn alpha_mask_cuts_surfaces_and_their_shadows() {
+    let mut s = empty_scene();
+    let floor_albedo = Vec3::new(0.2, 0.4, 0.6);
+    let m = lambert(&mut s, floor_albedo);
+    floor(&mut s, 3.0, m);
+    // Two texels: alpha 0 on the left (u < 0.5), 255 on the right, sampled nearest.
+    s.textures.push(Texture {
+        name: "mask".into(),
+        width: 2,
+        height: 1,
+        rgba8: vec![255, 255, 255, 0, 255, 255, 255, 255],
+        srgb: true,
+        wrap_s: Wrap::ClampToEdge,
+        wrap_t: Wrap::ClampToEdge,
+        mag_nearest: true,
+        min_nearest: true,
+    });
+    let leaf_albedo = Vec3::new(0.9, 0.7, 0.1);
+    let leaf = lambert(&mut s, leaf_albedo);
+    s.materials[leaf as usize].alpha_mode = AlphaMode::Mask(0.5);
+    s.materials[leaf as usize].base_color_tex = Some(TexRef {
+        texture: 0,
+        tex_coord: 0,
+    });
+    // quad() gives uv (0,0), (1,0), (1,1), (0,1) to its corners: u runs along +X.
+    let y = 1.0;
+    quad(
+        &mut s,
+        [
+            Vec3::new(-1.0, y, 1.0),
+            Vec3::new(1.0, y, 1.0),
+            Vec3::new(1.0, y, -1.0),
+            Vec3::new(-1.0, y, -1.0),
+        ],
+        leaf,
+    );
+    top_camera(&mut s, CAM_H, FOV);
+    let e = Vec3::splat(3.0);
+    s.lights
+        .push(light(LightKind::Directional, e, Vec3::ZERO, Vec3::NEG_Y));
+    // Direct light only: light bouncing between the floor and the leaf's underside would add
+    // to the floor what the analytic answer leaves out.
+    let direct = ReferenceSettings {
+        max_depth: 1,
+        ..settings(W, W, 4)
+    };
+    let img = render(&s, &direct);
+    let (mut cut, mut solid) = (0, 0);
+    for py in 0..W {
+        for px in 0..W {
+            // Where the camera ray crosses the leaf's plane (the camera is 3 m above it).
+            let p = floor_point(px as f32 + 0.5, py as f32 + 0.5, W, CAM_H - y, FOV);
+            if p.z.abs() > 0.9 || p.x.abs() > 0.9 || p.x.abs() < 0.1 {
+                continue;
+            }
+            let got = Vec3::from(img.at(px, py));
+            let want = if p.x < 0.0 {
+                cut += 1;
+                // The floor below, lit straight through the masked-out half.
+                floor_albedo / PI * e
+            } else {
+                solid += 1;
+                leaf_albedo / PI * e
+            };
+            assert!(
+                (got - want).abs().max_element() < 1e-4,
+                "pixel ({px},{py}) over x = {}: got {got}, want {want}",
+                p.x
+            );
+        }
+    }
+    assert!(cut > 20 && solid > 20, "{cut} / {solid} pixels");
+}
+
+fn cornell_scene(dir: &std::path::Path) -> PathBuf {
+    let path = dir.join("cornell.gltf");
+    builder::default_cornell_box().write(&path).unwrap();
+    path
+}
+
+/// A seed gives the same image bit for bit, on any number of threads; two seeds differ by
+/// what their own variance estimates predict.
+#[test]
+fn seeds_are_reproducible_and_agree_within_noise() {
+    let dir = common::temp_dir("reference-seeds");
+    let scene = load(&cornell_scene(&dir)).unwrap();
+    let st = settings(24, 24, 64);
+    let a = render_full(&scene, &st);
+    let one_thread = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap()
+        .install(|| render(&scene, &st));
+    assert_eq!(
+        a.image.pixels, one_thread.pixels,
+        "the same seed on 1 thread differs"
+    );
+    let b = render_full(&scene, &ReferenceSettings { seed: 2, ..st });
+    assert_ne!(a.image.pixels, b.image.pixels);
+    assert_eq!(a.bad_samples + b.bad_samples, 0);
+
+    // (A - B)^2 has expectation var(A) + var(B): compare the relMSE of A against B with
+    // what the variance estimates predict for it.
+    let (mut z2, mut predicted, mut within, mut n) = (0.0f64, 0.0f64, 0, 0);
+    for i in 0..a.image.pixels.len() {
+        for c in 0..3 {
+            let (x, y) = (a.image.pixels[i][c] as f64, b.image.pixels[i][c] as f64);
+            let var = (a.variance.pixels[i][c] + b.variance.pixels[i][c]) as f64;
+            predicted += var / (y * y + 0.01);
+            if var > 0.0 {
+                z2 += (x - y) * (x - y) / var;
+                within += ((x - y).abs() <= 3.0 * var.sqrt()) as usize;
+                n += 1;
+            }
+        }
+    }
+    let rel_mse = voxgi::metrics::compare(&a.image, &b.image).rel_mse;
+    predicted /= (a.image.pixels.len() * 3) as f64;
+    let mean_z2 = z2 / n as f64;
+    eprintln!(
+        "relMSE between seeds {rel_mse:.4e}, predicted {predicted:.4e}; mean z^2 {mean_z2:.3}; \
+         {within} of {n} within 3 sigma"
+    );
+    assert!(
+        rel_mse > 0.5 * predicted && rel_mse < 2.0 * predicted,
+        "relMSE {rel_mse} against predicted {predicted}"
+    );
+    assert!((0.6..1.6).contains(&mean_z2), "mean z^2 {mean_z2}");
+    assert!(
+        within as f64 > 0.95 * n as f64,
+        "{within} of {n} within 3 sigma"
+    );
+}
+
+fn voxgi(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_voxgi"))
+        .args(args)
+        .output()
+        .expect("run voxgi");
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!stderr.contains("panicked"), "voxgi panicked:\n{stderr}");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr,
+    )
+}
+
+#[test]
+fn cli_reference_writes_exr_and_compare_prints_json() {
+    let dir = common::temp_dir("reference-cli");
+    let scene = cornell_scene(&dir);
+    let s = scene.to_str().unwrap();
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    for (out, seed) in [(&a, "1"), (&b, "2")] {
+        let (ok, _, err) = voxgi(&[
+            "reference",
+            s,
+            "--spp",
+            "4",
+            "--out",
+            out.to_str().unwrap(),
+            "--width",
+            "20",
+            "--height",
+            "16",
+            "--seed",
+            seed,
+        ]);
+        assert!(ok, "reference failed:\n{err}");
+    }
+    let img = voxgi::output::load_exr(&a).unwrap();
+    assert_eq!((img.width, img.height), (20, 16));
+    assert!(!img.has_non_finite() && img.pixels.iter().any(|p| p[0] > 0.0));
+
+    let (ok, stdout, err) = voxgi(&["compare", a.to_str().unwrap(), b.to_str().unwrap()]);
+    assert!(ok, "compare failed:\n{err}");
+    assert_eq!(stdout.lines().count(), 1, "not one line: {stdout}");
+    let json: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+    for key in ["relMSE", "MAE", "RMSE", "FLIP"] {
+        let v = json[key]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{key} in {stdout}"));
+        assert!(v > 0.0 && v.is_finite(), "{key} = {v}");
+    }
+    let (ok, stdout, _) = voxgi(&["compare", a.to_str().unwrap(), a.to_str().unwrap()]);
+    assert!(ok);
+    let json: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+    assert_eq!(json["relMSE"].as_f64(), Some(0.0));
+    assert_eq!(json["FLIP"].as_f64(), Some(0.0));
+}
+
+#[test]
+fn cli_bad_input_fails_cleanly() {
+    let dir = common::temp_dir("reference-cli-bad");
+    let scene = cornell_scene(&dir);
+    let s = scene.to_str().unwrap();
+    let small = dir.join("small.exr");
+    let (ok, _, err) = voxgi(&[
+        "reference",
+        s,
+        "--spp",
+        "1",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--out",
+        small.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let other = dir.join("other.exr");
+    voxgi::output::save(
+        &RadianceImage {
+            width: 9,
+            height: 8,
+            pixels: vec![[0.5; 3]; 72],
+        },
+        &other,
+        0.0,
+    )
+    .unwrap();
+    let never = dir.join("never.exr");
+    let n = never.to_str().unwrap();
+    let missing = dir.join("missing.gltf");
+    let missing_exr = dir.join("missing.exr");
+    let (sm, ot) = (small.to_str().unwrap(), other.to_str().unwrap());
+    for (args, needle) in [
+        (
+            vec!["reference", missing.to_str().unwrap(), "--out", n],
+            "missing.gltf",
+        ),
+        (vec!["reference", s, "--spp", "0", "--out", n], "--spp"),
+        (vec!["reference", s, "--spp", "x", "--out", n], "--spp"),
+        (vec!["reference", s, "--out", "ref.tiff"], "ref.tiff"),
+        (
+            vec!["reference", s, "--sun", "1,2,3,4", "--out", n],
+            "--sun",
+        ),
+        (
+            vec!["compare", sm, missing_exr.to_str().unwrap()],
+            "missing.exr",
+        ),
+        (vec!["compare", sm, ot], "size"),
+        (vec!["compare", sm], "two images"),
+    ] {
+        let (ok, stdout, err) = voxgi(&args);
+        assert!(!ok, "{args:?} succeeded");
+        assert!(stdout.is_empty(), "{args:?} printed {stdout}");
+        assert!(
+            err.contains(needle) && err.contains("error"),
+            "{args:?}: the error does not name {needle}:\n{err}"
+        );
+    }
+    assert!(!never.exists(), "a failed run left {}", never.display());
+}
