@@ -35,7 +35,9 @@ vec3 gather(vec3 p, vec3 n) {
         e += weights[i] * trace_cone(origin, d, 1.0, 2.0 * vs, max_dist).radiance;
     }
 #else
-    vec3 origin = p + n * frame.trace.x * vs;
+    // From a voxel centre, which can lie up to sqrt(3)/2 voxel behind its surface: one voxel
+    // further out than the pixels' cones start.
+    vec3 origin = p + n * (frame.trace.x + 1.0) * vs;
     for (uint i = 0u; i < frame.grid_info.z; i++) {
         vec3 d = normalize(frame_n * frame.cones[i].xyz);
         e += frame.cones[i].w * trace_cone(origin, d, frame.cone.x, vs, max_dist).radiance;

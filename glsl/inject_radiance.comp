@@ -73,11 +73,18 @@ void main() {
         vec3 d = two_sided ? abs(l) : max(sign(n) * l, vec3(0.0));
         float n_dot_l = dot(w, d);
         if (n_dot_l <= 0.0 || all(equal(e, vec3(0.0)))) continue;
-        // The shadow is looked up half a voxel out, on the side facing the light.
+        // The shadow is looked up off the voxel, on the side facing the light: the paper moves
+        // half a voxel from the corner; the centre of a voxel a surface crosses can lie up to
+        // sqrt(3)/2 voxel behind it, so the default moves one and a half.
         vec3 side = (two_sided || dot(n, n) == 0.0) ? l : n;
+#ifdef PAPER
+        vec3 q = p + side * 0.5 * vs;
+#else
+        vec3 q = p + side * 1.5 * vs;
+#endif
         float vis = (frame.grid_info.w & FLAG_VOXEL_SHADOWS) != 0u
-            ? voxel_visibility(p + side * 0.5 * vs, l, dist)
-            : shadow_visibility(light, p + side * 0.5 * vs, side, shadow_map);
+            ? voxel_visibility(q, l, dist)
+            : shadow_visibility(light, q, side, shadow_map);
         irradiance += e * n_dot_l * vis;
     }
 #ifdef PAPER
