@@ -46,34 +46,8 @@ pub fn read_voxel_data<'g, 'a, 'r>(
     mut pass: crate::vk::graph::PassBuilder<'g, 'a, 'r>,
     volumes: &'r Volumes,
 ) -> crate::vk::graph::PassBuilder<'g, 'a, 'r> {
-    for d in &volumes.dummies {
-        pass = pass.buffer(d, Access::ComputeStorageRead);
-    }
-    match &volumes.data {
-        VoxelData::Sums {
-            static_accum,
-            static_emission,
-            dynamic_accum,
-            dynamic_emission,
-        } => {
-            for b in std::iter::once(static_accum)
-                .chain(static_emission)
-                .chain(dynamic_accum)
-                .chain(dynamic_emission)
-            {
-                pass = pass.buffer(b, Access::ComputeStorageRead);
-            }
-        }
-        VoxelData::Paper {
-            albedo,
-            normal,
-            emission,
-            ..
-        } => {
-            for b in std::iter::once(albedo).chain([normal]).chain(emission) {
-                pass = pass.buffer(b, Access::ComputeStorageRead);
-            }
-        }
+    for b in volumes.dummies.iter().chain(volumes.data.read_by_shaders()) {
+        pass = pass.buffer(b, Access::ComputeStorageRead);
     }
     pass
 }

@@ -27,6 +27,55 @@ pub enum VoxelData {
     },
 }
 
+impl VoxelData {
+    /// The buffers the static (or the dynamic) voxelization pass writes.
+    pub fn written_by(&self, dynamic: bool) -> Vec<&Buffer> {
+        match self {
+            VoxelData::Sums {
+                static_accum,
+                static_emission,
+                dynamic_accum,
+                dynamic_emission,
+            } => match dynamic {
+                true => dynamic_accum.iter().chain(dynamic_emission).collect(),
+                false => std::iter::once(static_accum)
+                    .chain(static_emission)
+                    .collect(),
+            },
+            // The paper's passes share its volumes; the dynamic one reads the flags.
+            VoxelData::Paper {
+                albedo,
+                normal,
+                emission,
+                flag,
+            } => [Some(albedo), Some(normal), emission.as_ref(), flag.as_ref()]
+                .into_iter()
+                .flatten()
+                .collect(),
+        }
+    }
+
+    /// The buffers the lighting passes and views read.
+    pub fn read_by_shaders(&self) -> Vec<&Buffer> {
+        match self {
+            VoxelData::Sums { .. } => {
+                let mut v = self.written_by(false);
+                v.extend(self.written_by(true));
+                v
+            }
+            VoxelData::Paper {
+                albedo,
+                normal,
+                emission,
+                ..
+            } => std::iter::once(albedo)
+                .chain([normal])
+                .chain(emission)
+                .collect(),
+        }
+    }
+}
+
 /// Name and bytes of one volume, for `voxgi info`.
 #[derive(Clone, Debug)]
 pub struct VolumeInfo {

@@ -137,38 +137,12 @@ impl Voxelizer {
         access: Access,
     ) -> crate::vk::graph::PassBuilder<'g, 'a, 'r> {
         let mut pass = pass;
-        for d in &volumes.dummies {
-            pass = pass.buffer(d, access);
-        }
-        match &volumes.data {
-            VoxelData::Sums {
-                static_accum,
-                static_emission,
-                dynamic_accum,
-                dynamic_emission,
-            } => {
-                let (a, e) = if dynamic {
-                    (dynamic_accum.as_ref(), dynamic_emission.as_ref())
-                } else {
-                    (Some(static_accum), static_emission.as_ref())
-                };
-                for b in a.into_iter().chain(e) {
-                    pass = pass.buffer(b, access);
-                }
-            }
-            VoxelData::Paper {
-                albedo,
-                normal,
-                emission,
-                flag,
-            } => {
-                for b in [Some(albedo), Some(normal), emission.as_ref(), flag.as_ref()]
-                    .into_iter()
-                    .flatten()
-                {
-                    pass = pass.buffer(b, access);
-                }
-            }
+        for b in volumes
+            .dummies
+            .iter()
+            .chain(volumes.data.written_by(dynamic))
+        {
+            pass = pass.buffer(b, access);
         }
         pass
     }
@@ -233,37 +207,12 @@ impl Voxelizer {
                 // A fill clears what this pass rebuilds (the paper's static pass clears all).
                 let pass =
                     Self::declare(g.pass(clear_name), volumes, dynamic, Access::TransferWrite);
-                let buffers: Vec<vk::Buffer> = match &volumes.data {
-                    VoxelData::Sums {
-                        static_accum,
-                        static_emission,
-                        dynamic_accum,
-                        dynamic_emission,
-                    } => {
-                        if dynamic {
-                            dynamic_accum
-                                .iter()
-                                .chain(dynamic_emission)
-                                .map(|b| b.raw)
-                                .collect()
-                        } else {
-                            std::iter::once(static_accum)
-                                .chain(static_emission)
-                                .map(|b| b.raw)
-                                .collect()
-                        }
-                    }
-                    VoxelData::Paper {
-                        albedo,
-                        normal,
-                        emission,
-                        flag,
-                    } => [Some(albedo), Some(normal), emission.as_ref(), flag.as_ref()]
-                        .into_iter()
-                        .flatten()
-                        .map(|b| b.raw)
-                        .collect(),
-                };
+                let buffers: Vec<vk::Buffer> = volumes
+                    .data
+                    .written_by(dynamic)
+                    .iter()
+                    .map(|b| b.raw)
+                    .collect();
                 pass.record(|cmd| unsafe {
                     for b in &buffers {
                         d.cmd_fill_buffer(cmd, *b, 0, vk::WHOLE_SIZE, 0);
@@ -288,10 +237,6 @@ impl Voxelizer {
         for t in &gpu.textures {
             pass = pass.image(t, Access::FragmentSampled);
         }
-        // The paper's dynamic pass reads the static flags.
-        if let (VoxelData::Paper { flag: Some(f), .. }, true) = (&volumes.data, dynamic) {
-            pass = pass.buffer(f, Access::FragmentStorageReadWrite);
-        }
         let target = if dynamic {
             self.dynamic_target.as_ref().unwrap_or(&self.static_target)
         } else {
@@ -299,13 +244,7 @@ impl Voxelizer {
         };
         pass.record(|cmd| unsafe {
             let info = vk::RenderingInfo::default()
-                .render_area(vk::Rect2D {
-                    offset: vk::Offset2D { x: 0, y: 0 },
-                    extent: vk::Extent2D {
-                        width: n,
-                        height: n,
-                    },
-                })
+                .render_area(pipelines::area(n, n))
                 .layer_count(1);
             d.cmd_begin_rendering(cmd, &info);
             // A plain viewport: the geometry shader already maps voxels to pixels.
@@ -321,17 +260,7 @@ impl Voxelizer {
                     max_depth: 1.0,
                 }],
             );
-            d.cmd_set_scissor(
-                cmd,
-                0,
-                &[vk::Rect2D {
-                    offset: vk::Offset2D { x: 0, y: 0 },
-                    extent: vk::Extent2D {
-                        width: n,
-                        height: n,
-                    },
-                }],
-            );
+            d.cmd_set_scissor(cmd, 0, &[pipelines::area(n, n)]);
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline.raw);
             d.cmd_bind_descriptor_sets(
                 cmd,

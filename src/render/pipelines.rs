@@ -479,3 +479,29 @@ pub fn set_viewport(ctx: &Context, cmd: vk::CommandBuffer, width: u32, height: u
         ctx.device.cmd_set_scissor(cmd, 0, &[scissor]);
     }
 }
+
+/// A depth attachment cleared to 1 (the far plane).
+pub fn cleared_depth(
+    view: vk::ImageView,
+    store: vk::AttachmentStoreOp,
+) -> vk::RenderingAttachmentInfo<'static> {
+    vk::RenderingAttachmentInfo::default()
+        .image_view(view)
+        .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
+        .load_op(vk::AttachmentLoadOp::CLEAR)
+        .store_op(store)
+        .clear_value(vk::ClearValue {
+            depth_stencil: vk::ClearDepthStencilValue {
+                depth: 1.0,
+                stencil: 0,
+            },
+        })
+}
+
+/// The whole of a `width` x `height` target.
+pub fn area(width: u32, height: u32) -> vk::Rect2D {
+    vk::Rect2D {
+        offset: vk::Offset2D { x: 0, y: 0 },
+        extent: vk::Extent2D { width, height },
+    }
+}

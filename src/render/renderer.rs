@@ -764,25 +764,12 @@ impl Renderer {
             }
             pass.record(|cmd| {
                 for view in 0..self.gpu.shadow_view_count {
-                    let depth = vk::RenderingAttachmentInfo::default()
-                        .image_view(self.shadow_map.layer_view(view))
-                        .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-                        .load_op(vk::AttachmentLoadOp::CLEAR)
-                        .store_op(vk::AttachmentStoreOp::STORE)
-                        .clear_value(vk::ClearValue {
-                            depth_stencil: vk::ClearDepthStencilValue {
-                                depth: 1.0,
-                                stencil: 0,
-                            },
-                        });
+                    let depth = pipelines::cleared_depth(
+                        self.shadow_map.layer_view(view),
+                        vk::AttachmentStoreOp::STORE,
+                    );
                     let info = vk::RenderingInfo::default()
-                        .render_area(vk::Rect2D {
-                            offset: vk::Offset2D { x: 0, y: 0 },
-                            extent: vk::Extent2D {
-                                width: res,
-                                height: res,
-                            },
-                        })
+                        .render_area(pipelines::area(res, res))
                         .layer_count(1)
                         .depth_attachment(&depth);
                     unsafe { d.cmd_begin_rendering(cmd, &info) };
@@ -880,25 +867,9 @@ impl Renderer {
                         })
                 })
                 .collect();
-            let depth = vk::RenderingAttachmentInfo::default()
-                .image_view(self.depth.view)
-                .image_layout(vk::ImageLayout::DEPTH_ATTACHMENT_OPTIMAL)
-                .load_op(vk::AttachmentLoadOp::CLEAR)
-                .store_op(vk::AttachmentStoreOp::DONT_CARE)
-                .clear_value(vk::ClearValue {
-                    depth_stencil: vk::ClearDepthStencilValue {
-                        depth: 1.0,
-                        stencil: 0,
-                    },
-                });
+            let depth = pipelines::cleared_depth(self.depth.view, vk::AttachmentStoreOp::DONT_CARE);
             let info = vk::RenderingInfo::default()
-                .render_area(vk::Rect2D {
-                    offset: vk::Offset2D { x: 0, y: 0 },
-                    extent: vk::Extent2D {
-                        width: w,
-                        height: h,
-                    },
-                })
+                .render_area(pipelines::area(w, h))
                 .layer_count(1)
                 .color_attachments(&colors)
                 .depth_attachment(&depth);

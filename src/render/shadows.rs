@@ -23,27 +23,10 @@ fn any_up(dir: Vec3) -> Vec3 {
 /// Depth range of a perspective light view: from a small fraction of the scene to its far side.
 fn near_far(eye: Vec3, bounds: &Aabb) -> (f32, f32) {
     let radius = (bounds.extent().length() * 0.5).max(1e-3);
-    let far_corner = (0..8)
-        .map(|i| {
-            let c = Vec3::new(
-                if i & 1 == 0 {
-                    bounds.min.x
-                } else {
-                    bounds.max.x
-                },
-                if i & 2 == 0 {
-                    bounds.min.y
-                } else {
-                    bounds.max.y
-                },
-                if i & 4 == 0 {
-                    bounds.min.z
-                } else {
-                    bounds.max.z
-                },
-            );
-            (c - eye).length()
-        })
+    let far_corner = bounds
+        .corners()
+        .iter()
+        .map(|c| (*c - eye).length())
         .fold(0.0f32, f32::max);
     let near = (radius * 2e-3).max(1e-4);
     (near, (far_corner * 1.01).max(near * 10.0))

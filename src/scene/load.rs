@@ -920,24 +920,7 @@ impl Loader<'_> {
 fn far_from_bounds(eye: Vec3, bounds: &Aabb, znear: f32) -> f32 {
     let mut far = 0.0f32;
     if !bounds.is_empty() {
-        for i in 0..8 {
-            let corner = Vec3::new(
-                if i & 1 == 0 {
-                    bounds.min.x
-                } else {
-                    bounds.max.x
-                },
-                if i & 2 == 0 {
-                    bounds.min.y
-                } else {
-                    bounds.max.y
-                },
-                if i & 4 == 0 {
-                    bounds.min.z
-                } else {
-                    bounds.max.z
-                },
-            );
+        for corner in bounds.corners() {
             far = far.max(eye.distance(corner));
         }
     }

@@ -227,18 +227,23 @@ impl Aabb {
     pub fn extent(&self) -> Vec3 {
         self.max - self.min
     }
+    /// The eight corners (min/max per axis by the bits of the index).
+    pub fn corners(&self) -> [Vec3; 8] {
+        std::array::from_fn(|i| {
+            Vec3::new(
+                if i & 1 == 0 { self.min.x } else { self.max.x },
+                if i & 2 == 0 { self.min.y } else { self.max.y },
+                if i & 4 == 0 { self.min.z } else { self.max.z },
+            )
+        })
+    }
     /// World bounds of this box under a transform.
     pub fn transformed(&self, m: &Mat4) -> Aabb {
         let mut out = Aabb::EMPTY;
         if self.is_empty() {
             return out;
         }
-        for i in 0..8 {
-            let p = Vec3::new(
-                if i & 1 == 0 { self.min.x } else { self.max.x },
-                if i & 2 == 0 { self.min.y } else { self.max.y },
-                if i & 4 == 0 { self.min.z } else { self.max.z },
-            );
+        for p in self.corners() {
             out.extend(m.transform_point3(p));
         }
         out
