@@ -321,3 +321,30 @@ fn dynamic_node_leaves_nothing_behind_and_static_voxels_stay() {
         assert_eq!(stats.count(), 0, "{}", stats.messages().join("\n"));
     }
 }
+
+#[test]
+fn emissive_strengths_survive_in_the_voxels() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/scenes/EmissiveStrengthTest/EmissiveStrengthTest.gltf");
+    let s = voxgi::scene::load(&path).unwrap();
+    let strongest = s
+        .materials
+        .iter()
+        .map(|m| m.emissive.max_element())
+        .fold(0.0f32, f32::max);
+    assert!(
+        strongest > 1.0,
+        "the test scene has HDR emission ({strongest})"
+    );
+    let d = render_voxels(&s, voxel_settings(64, false, Mode::VoxelsEmission));
+    // Voxels inside the strongest emitter's surface hold its emission exactly (no clamp to 1).
+    let max = d
+        .emission
+        .iter()
+        .map(|e| e.max_element())
+        .fold(0.0f32, f32::max);
+    assert!(
+        (max - strongest).abs() < 0.01 * strongest,
+        "brightest voxel {max}, strongest emitter {strongest}"
+    );
+}

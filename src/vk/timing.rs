@@ -143,7 +143,7 @@ impl PassTimer {
             })
             .collect();
         let total: f64 = self.medians().iter().map(|r| r.1).sum();
-        let frames = self.samples.first().map(|s| s.1.len()).unwrap_or(0);
+        let frames = self.samples.iter().map(|s| s.1.len()).max().unwrap_or(0);
         let mut out = format!("pass timings, median over {frames} frame(s):\n");
         for r in rows.values() {
             out.push_str(r);
