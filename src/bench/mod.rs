@@ -11,7 +11,7 @@ pub mod pareto;
 pub mod report;
 pub mod sweep;
 
-pub use sweep::{Setting, SWEEP_HELP};
+pub use sweep::Setting;
 
 use crate::gi::GiSettings;
 use crate::metrics::{self, Metrics};
@@ -26,7 +26,7 @@ use std::sync::Arc;
 #[derive(Clone, Debug)]
 pub struct BenchOptions {
     pub scene: PathBuf,
-    /// A sweep spec (see [`SWEEP_HELP`]).
+    /// A sweep spec (see [`sweep`]).
     pub sweep: String,
     /// Where the results go.
     pub out_dir: PathBuf,
@@ -149,6 +149,23 @@ pub struct BenchResults {
     /// cache has no variance image).
     pub reference_noise: Option<f64>,
     pub rows: Vec<Row>,
+}
+
+/// The words of a command line joined for a POSIX shell: any word with characters a shell
+/// would read specially is single-quoted.
+pub fn shell_words(words: &[String]) -> String {
+    let plain = |c: char| c.is_ascii_alphanumeric() || "_-./=,:+^@%".contains(c);
+    words
+        .iter()
+        .map(|w| {
+            if !w.is_empty() && w.chars().all(plain) {
+                w.clone()
+            } else {
+                format!("'{}'", w.replace('\'', "'\\''"))
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 /// FNV-1a, 64 bits: stable across runs and Rust versions, unlike `DefaultHasher`.
@@ -466,6 +483,17 @@ pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn shell_words_quote_what_a_shell_would_split() {
+        let w = |v: &[&str]| shell_words(&v.iter().map(|s| s.to_string()).collect::<Vec<_>>());
+        assert_eq!(w(&["voxgi", "bench", "a.gltf"]), "voxgi bench a.gltf");
+        assert_eq!(
+            w(&["--sweep", "voxels=32;paper=0,1"]),
+            "--sweep 'voxels=32;paper=0,1'"
+        );
+        assert_eq!(w(&["it's", ""]), "'it'\\''s' ''");
+    }
 
     #[test]
     fn spread_median_of_odd_and_even_counts() {

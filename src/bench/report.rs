@@ -236,10 +236,13 @@ pub fn markdown(res: &BenchResults) -> String {
     );
     let _ = writeln!(
         out,
-        "- time: median (min to max) over {} frames after {} warm-up frames; frame = submission \
-         to fence (wall clock), passes = GPU timestamps (on lavapipe they can miss compute work: \
-         trust the frame time there)",
-        o.frames, o.warmup
+        "- time: median (min to max) over {} frame{} after {} warm-up frame{}; frame = \
+         submission to fence (wall clock), passes = GPU timestamps (on lavapipe they can miss \
+         compute work: trust the frame time there)",
+        o.frames,
+        if o.frames == 1 { "" } else { "s" },
+        o.warmup,
+        if o.warmup == 1 { "" } else { "s" }
     );
     let noise = res.reference_noise.map_or(String::new(), |v| {
         format!("; its noise alone adds about {} to relMSE", sig(v))

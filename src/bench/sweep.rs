@@ -13,16 +13,6 @@
 
 use crate::gi::GiSettings;
 
-/// The grammar, for `--help`.
-pub const SWEEP_HELP: &str = "\
-SPEC := PART ('|' PART)*, the union of the parts; PART := PRESET | AXIS (';' AXIS)*;
-AXIS := NAME=V1,V2,... (the cartesian product of the axes over the defaults).
-Presets: default (one axis at a time around the defaults: voxels 32..256, each also with
---paper; cones 1,4,6,9,16; aperture 30..90; step 0.25,0.5,1; bounces 1,2), tiny (32^3:
-default and paper). Axes: voxels, bounces, paper, cones, aperture, step, max-distance,
-start-offset, ao-falloff, voxel-shadows, cone-shadows, lod-offset (booleans 0/1).
-Example: --sweep 'voxels=32,64;cones=4,6;paper=0,1'";
-
 /// One setting of the sweep.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Setting {
