@@ -334,13 +334,20 @@ impl BenchOptions {
     }
 }
 
+/// What one setting's frames measured, and its image.
+struct Measured {
+    passes: Vec<(String, Spread)>,
+    frame: Spread,
+    image: RadianceImage,
+}
+
 /// Warm-up frames, then `frames` timed ones, then one with readback for the image.
 fn measure(
     ctx: &Arc<Context>,
     scene: &Scene,
     opts: &BenchOptions,
     setting: &Setting,
-) -> Result<(Vec<(String, Spread)>, Spread, RadianceImage), String> {
+) -> Result<Measured, String> {
     let settings = RenderSettings {
         width: opts.width,
         height: opts.height,
@@ -378,7 +385,11 @@ fn measure(
         height: opts.height,
         pixels: r.radiance(),
     };
-    Ok((passes, frame, image))
+    Ok(Measured {
+        passes,
+        frame,
+        image,
+    })
 }
 
 /// Runs the benchmark and writes its outputs into `opts.out_dir` (all of them, or none on
@@ -426,7 +437,11 @@ pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
             label: setting.label.clone(),
             reason,
         };
-        let (passes, frame, image) = measure(&ctx, &scene, opts, setting).map_err(fail)?;
+        let Measured {
+            passes,
+            frame,
+            image,
+        } = measure(&ctx, &scene, opts, setting).map_err(fail)?;
         if opts.validate && ctx.stats.count() > 0 {
             return Err(fail(format!(
                 "validation reported {} message(s)",
