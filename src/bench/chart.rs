@@ -103,6 +103,16 @@ impl Canvas {
     }
 }
 
+/// x0, y0, x1, y1 (inclusive).
+type Rect = (i32, i32, i32, i32);
+
+/// Overlapping area of two rectangles, in pixels.
+fn overlap(a: &Rect, b: &Rect) -> i32 {
+    let w = (a.2.min(b.2) - a.0.max(b.0) + 1).max(0);
+    let h = (a.3.min(b.3) - a.1.max(b.1) + 1).max(0);
+    w * h
+}
+
 fn text_width(s: &str, scale: i32) -> i32 {
     (s.chars().count() as i32 * font::ADVANCE as i32 - 1).max(0) * scale
 }
@@ -221,21 +231,50 @@ pub fn draw(points: &[Point], title: &str) -> RgbImage {
             c.disc(x, y, 5, BLUE);
         }
     }
-    // Labels last, so that no point covers them; the front's with their settings.
-    for p in &shown {
+    // Labels last, so that no point covers them: the front's (with their settings) placed
+    // first, each where it overlaps the points and earlier labels least.
+    let mut taken: Vec<Rect> = shown
+        .iter()
+        .map(|p| {
+            let (x, y) = (px(p.time), py(p.error));
+            (x - 9, y - 9, x + 9, y + 9)
+        })
+        .collect();
+    let mut order: Vec<&&Point> = shown.iter().collect();
+    order.sort_by_key(|p| !p.pareto);
+    for p in order {
         let (x, y) = (px(p.time), py(p.error));
         let (s, colour) = if p.pareto {
             (format!("{} {}", p.index, p.label), RED)
         } else {
             (p.index.to_string(), GREY)
         };
-        let w = text_width(&s, 2);
-        let tx = if x + 12 + w > W as i32 - 4 {
-            x - 12 - w
-        } else {
-            x + 12
+        let (w, h) = (text_width(&s, 2), 14);
+        let candidates = [
+            (x + 12, y - 16),
+            (x + 12, y + 3),
+            (x - 12 - w, y - 16),
+            (x - 12 - w, y + 3),
+            (x - w / 2, y - 28),
+            (x - w / 2, y + 13),
+        ];
+        let cost = |&(tx, ty): &(i32, i32)| {
+            let r = (tx, ty, tx + w, ty + h);
+            let outside = r.0 < 0 || r.1 < 0 || r.2 >= W as i32 || r.3 >= H as i32;
+            let overlap: i32 = taken.iter().map(|t| overlap(&r, t)).sum();
+            overlap + if outside { 1 << 20 } else { 0 }
         };
-        c.text(tx, y - 16, &s, 2, colour);
+        // min_by_key keeps the first of equal costs: the preferred places come first.
+        let &(tx, ty) = candidates
+            .iter()
+            .min_by_key(|c| cost(c))
+            .unwrap_or(&candidates[0]);
+        taken.push((tx, ty, tx + w, ty + h));
+        // A white halo keeps the text readable over grid lines and the front.
+        for (dx, dy) in [(-1, 0), (1, 0), (0, -1), (0, 1)] {
+            c.text(tx + dx, ty + dy, &s, 2, WHITE);
+        }
+        c.text(tx, ty, &s, 2, colour);
     }
     c.0
 }
