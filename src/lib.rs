@@ -1,6 +1,7 @@
 //! voxgi: real-time global illumination by deferred voxel shading (Villegas and Ramirez, 2016)
 //! on Vulkan.
 
+pub mod bench;
 pub mod gi;
 pub mod metrics;
 pub mod output;

@@ -20,6 +20,8 @@ USAGE:
   voxgi reference [SCENE] [--spp N] [--out FILE.exr] [--width W] [--height H] [--seed S]
                   [--sun EL,AZ[,E]]
   voxgi compare A.exr REFERENCE.exr [--exposure EV]
+  voxgi bench SCENE [--sweep SPEC] [--out DIR] [--width W --height H] [--frames N]
+              [--warmup N] [--ref-spp N] [--sun EL,AZ[,E]] [--exposure EV] [--validate]
 
   SCENE        a glTF 2.0 file (.gltf or .glb); render defaults to the bundled Cornell box
   --out FILE   .exr: linear radiance (RGB float); .png: display image (default voxgi.png)
@@ -46,6 +48,18 @@ USAGE:
   --device NAME           use the Vulkan device whose name contains NAME
   reference    CPU path-traced ground truth (all cores; --spp default 64, --seed default 0)
   compare      prints one JSON line: relMSE, MAE, RMSE (radiance) and FLIP (display images)
+  bench        times each setting of a sweep (per-pass GPU medians and frame wall time over
+               --frames, default 10, after --warmup, default 2) and measures its error
+               against the reference (--ref-spp, default 256; cached in DIR/cache by scene
+               content, size and spp); writes DIR (default bench/) results.csv, results.json,
+               results.md and pareto.png. --sweep SPEC (default: default):
+               SPEC := PART ('|' PART)*, the union of the parts; PART := PRESET | AXIS (';' AXIS)*
+               AXIS := NAME=V1,V2,..: the cartesian product of the axes over the defaults
+               presets: default (one axis at a time around the defaults: voxels 32..256 each
+               also with the paper's settings, cones 1..16, aperture 30..90, step 0.25..1,
+               bounces 1,2), tiny (32^3: default and paper). Axes: voxels, bounces, paper,
+               cones, aperture, step, max-distance, start-offset, ao-falloff, voxel-shadows,
+               cone-shadows, lod-offset. Example: --sweep 'voxels=32,64;cones=4,6;paper=0,1'
 ";
 
 /// The Cornell box generated into assets/ (see voxgi::scene::builder).
@@ -84,6 +98,9 @@ const VALUED: &[&str] = &[
     "--step",
     "--spp",
     "--seed",
+    "--sweep",
+    "--warmup",
+    "--ref-spp",
 ];
 
 impl Args {
@@ -492,6 +509,41 @@ fn compare(args: &Args) -> Result<()> {
     Ok(())
 }
 
+/// `voxgi bench`: the sweep, timing and error measurement live in voxgi::bench.
+fn bench(args: &Args) -> Result<()> {
+    let [scene] = args.positional.as_slice() else {
+        bail!("bench takes one scene\n\n{USAGE}");
+    };
+    let d = voxgi::bench::BenchOptions::default();
+    let opts = voxgi::bench::BenchOptions {
+        scene: PathBuf::from(scene),
+        sweep: args.value("--sweep").unwrap_or(&d.sweep).to_string(),
+        out_dir: args.value("--out").map_or(d.out_dir.clone(), PathBuf::from),
+        width: args.number("--width", d.width)?,
+        height: args.number("--height", d.height)?,
+        frames: args.number("--frames", d.frames)?,
+        warmup: args.number("--warmup", d.warmup)?,
+        ref_spp: args.number("--ref-spp", d.ref_spp)?,
+        extra_lights: args
+            .value("--sun")
+            .map(parse_sun)
+            .transpose()?
+            .into_iter()
+            .collect(),
+        exposure: args.number("--exposure", d.exposure)?,
+        validate: args.flag("--validate"),
+        device: args.value("--device").map(String::from),
+        command_line: voxgi::bench::shell_words(
+            &std::iter::once("voxgi".to_string())
+                .chain(std::env::args().skip(1))
+                .collect::<Vec<_>>(),
+        ),
+        ..d
+    };
+    voxgi::bench::run(&opts)?;
+    Ok(())
+}
+
 fn run() -> Result<()> {
     let argv: Vec<String> = std::env::args().skip(1).collect();
     let Some(cmd) = argv.first() else {
@@ -508,6 +560,7 @@ fn run() -> Result<()> {
         "info" => info(&args),
         "reference" => reference(&args),
         "compare" => compare(&args),
+        "bench" => bench(&args),
         "--help" | "-h" | "help" => {
             print!("{USAGE}");
             Ok(())

@@ -34,7 +34,8 @@ pub struct ReferenceSettings {
     pub spp: u32,
     pub seed: u64,
     /// A hard cap on path length (bounces), far beyond where Russian roulette ends paths;
-    /// it only guards against endless paths in closed scenes of albedo 1.
+    /// it only guards against endless paths in closed scenes of albedo 1. 1 gives direct
+    /// light only: emission and next-event estimation at the first hit, no bounce.
     pub max_depth: u32,
     /// Bounces before Russian roulette starts.
     pub rr_depth: u32,

@@ -1,0 +1,554 @@
+//! `voxgi bench`: renders a sweep of voxel settings, measures each one's GPU time per pass and
+//! frame wall time, and its error against the path-traced reference of the same view; writes
+//! results.csv, results.json, results.md and pareto.png.
+//!
+//! The reference is rendered once per scene content, size and sample count and kept in a cache
+//! directory (`reference-<hash>-<w>x<h>-<spp>.exr`, with its variance estimate beside it).
+
+pub mod chart;
+mod font;
+pub mod pareto;
+pub mod report;
+pub mod sweep;
+
+pub use sweep::Setting;
+
+use crate::gi::GiSettings;
+use crate::metrics::{self, Metrics};
+use crate::output::{self, RadianceImage};
+use crate::reference::{self, ReferenceSettings};
+use crate::render::{Mode, RenderSettings, Renderer};
+use crate::scene::{self, Light, Scene};
+use crate::vk::{Context, ContextDesc};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+#[derive(Clone, Debug)]
+pub struct BenchOptions {
+    pub scene: PathBuf,
+    /// A sweep spec (see [`sweep`]).
+    pub sweep: String,
+    /// Where the results go.
+    pub out_dir: PathBuf,
+    /// Where references are cached (None: `out_dir/cache`).
+    pub cache_dir: Option<PathBuf>,
+    pub width: u32,
+    pub height: u32,
+    /// Frames timed per setting, after `warmup` frames that are not.
+    pub frames: u32,
+    pub warmup: u32,
+    /// Samples per pixel of the reference.
+    pub ref_spp: u32,
+    /// Lights added to the scene (the command line's `--sun`), part of the cache key.
+    pub extra_lights: Vec<Light>,
+    /// Display exposure of both images for FLIP.
+    pub exposure: f32,
+    pub validate: bool,
+    pub device: Option<String>,
+    /// The command line, quoted in results.md.
+    pub command_line: String,
+}
+
+impl Default for BenchOptions {
+    fn default() -> Self {
+        BenchOptions {
+            scene: PathBuf::new(),
+            sweep: "default".into(),
+            out_dir: PathBuf::from("bench"),
+            cache_dir: None,
+            width: 512,
+            height: 512,
+            frames: 10,
+            warmup: 2,
+            ref_spp: 256,
+            extra_lights: Vec::new(),
+            exposure: 0.0,
+            validate: false,
+            device: None,
+            command_line: String::new(),
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum BenchError {
+    #[error("--sweep {spec:?}: {reason}")]
+    Sweep { spec: String, reason: String },
+    #[error("{0}")]
+    Options(String),
+    #[error(transparent)]
+    Scene(#[from] scene::SceneError),
+    #[error(transparent)]
+    Output(#[from] output::OutputError),
+    #[error("{0}")]
+    Vulkan(#[from] crate::vk::VkError),
+    #[error("setting {label:?}: {reason}")]
+    Setting { label: String, reason: String },
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+}
+
+/// Median and extremes of a set of timings, in milliseconds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spread {
+    pub median: f64,
+    pub min: f64,
+    pub max: f64,
+}
+
+impl Spread {
+    /// None for no samples.
+    pub fn of(samples: &[f64]) -> Option<Spread> {
+        let mut s: Vec<f64> = samples.iter().copied().filter(|v| v.is_finite()).collect();
+        if s.is_empty() {
+            return None;
+        }
+        s.sort_by(f64::total_cmp);
+        let n = s.len();
+        let median = if n % 2 == 1 {
+            s[n / 2]
+        } else {
+            0.5 * (s[n / 2 - 1] + s[n / 2])
+        };
+        Some(Spread {
+            median,
+            min: s[0],
+            max: s[n - 1],
+        })
+    }
+}
+
+/// One measured setting.
+#[derive(Clone, Debug)]
+pub struct Row {
+    /// 1-based, in sweep order (the chart's point labels).
+    pub index: usize,
+    pub label: String,
+    pub gi: GiSettings,
+    /// GPU time per pass (timestamps), in the order the passes ran.
+    pub passes: Vec<(String, Spread)>,
+    /// Submission to fence per frame.
+    pub frame: Spread,
+    pub metrics: Metrics,
+    /// Not beaten in both frame time and relMSE by another setting.
+    pub pareto: bool,
+}
+
+/// Everything a run measured, and what it was run on.
+#[derive(Clone, Debug)]
+pub struct BenchResults {
+    pub options: BenchOptions,
+    pub device: String,
+    pub reference_path: PathBuf,
+    /// The reference came from the cache.
+    pub reference_cached: bool,
+    /// relMSE that the reference's own noise adds, estimated from its variance (None when the
+    /// cache has no variance image).
+    pub reference_noise: Option<f64>,
+    pub rows: Vec<Row>,
+}
+
+/// The words of a command line joined for a POSIX shell: any word with characters a shell
+/// would read specially is single-quoted.
+pub fn shell_words(words: &[String]) -> String {
+    let plain = |c: char| c.is_ascii_alphanumeric() || "_-./=,:+^@%".contains(c);
+    words
+        .iter()
+        .map(|w| {
+            if !w.is_empty() && w.chars().all(plain) {
+                w.clone()
+            } else {
+                format!("'{}'", w.replace('\'', "'\\''"))
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// FNV-1a, 64 bits: stable across runs and Rust versions, unlike `DefaultHasher`.
+struct Fnv(u64);
+
+impl Fnv {
+    fn new() -> Fnv {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+    fn bytes(&mut self, b: &[u8]) -> &mut Fnv {
+        // Length first, so that consecutive fields cannot run into each other.
+        for &x in (b.len() as u64).to_le_bytes().iter().chain(b) {
+            self.0 ^= x as u64;
+            self.0 = self.0.wrapping_mul(0x0100_0000_01b3);
+        }
+        self
+    }
+}
+
+/// The reference's cache key: the scene file's bytes, the lights added to it, the reference
+/// settings and the crate version (a new path tracer may converge elsewhere).
+pub fn reference_key(
+    scene_bytes: &[u8],
+    extra_lights: &[Light],
+    settings: &ReferenceSettings,
+) -> String {
+    let mut h = Fnv::new();
+    h.bytes(env!("CARGO_PKG_VERSION").as_bytes())
+        .bytes(scene_bytes);
+    for l in extra_lights {
+        h.bytes(format!("{:?}", l.kind).as_bytes());
+        for v in [l.radiance, l.position, l.direction] {
+            for x in v.to_array() {
+                h.bytes(&x.to_bits().to_le_bytes());
+            }
+        }
+        h.bytes(&l.range.unwrap_or(-1.0).to_bits().to_le_bytes());
+    }
+    for x in [
+        settings.seed,
+        settings.max_depth as u64,
+        settings.rr_depth as u64,
+    ] {
+        h.bytes(&x.to_le_bytes());
+    }
+    format!(
+        "{:016x}-{}x{}-{}",
+        h.0, settings.width, settings.height, settings.spp
+    )
+}
+
+/// Mean over pixels and channels of var / (R^2 + eps): what comparing a perfect image against
+/// this noisy reference would give as relMSE.
+fn noise_rel_mse(image: &RadianceImage, variance: &RadianceImage) -> f64 {
+    let mut sum = 0.0;
+    for (p, v) in image.pixels.iter().zip(&variance.pixels) {
+        for c in 0..3 {
+            let r = p[c] as f64;
+            sum += v[c] as f64 / (r * r + metrics::REL_MSE_EPSILON);
+        }
+    }
+    sum / (image.pixels.len() * 3).max(1) as f64
+}
+
+/// The reference from the cache when it is there and of the right size, else rendered and
+/// stored. Returns (image, path, cached, noise).
+fn reference(
+    scene: &Scene,
+    opts: &BenchOptions,
+    scene_bytes: &[u8],
+) -> Result<(RadianceImage, PathBuf, bool, Option<f64>), BenchError> {
+    let settings = ReferenceSettings {
+        width: opts.width,
+        height: opts.height,
+        spp: opts.ref_spp,
+        progress: true,
+        ..Default::default()
+    };
+    let dir = opts
+        .cache_dir
+        .clone()
+        .unwrap_or_else(|| opts.out_dir.join("cache"));
+    let key = reference_key(scene_bytes, &opts.extra_lights, &settings);
+    let path = dir.join(format!("reference-{key}.exr"));
+    let var_path = dir.join(format!("reference-{key}-var.exr"));
+    if path.exists() {
+        match output::load_exr(&path) {
+            Ok(img)
+                if (img.width, img.height) == (opts.width, opts.height)
+                    && !img.has_non_finite() =>
+            {
+                let noise = output::load_exr(&var_path)
+                    .ok()
+                    .filter(|v| (v.width, v.height) == (img.width, img.height))
+                    .map(|v| noise_rel_mse(&img, &v));
+                eprintln!("reference: cached {}", path.display());
+                return Ok((img, path, true, noise));
+            }
+            Ok(img) => eprintln!(
+                "warning: {}: cached reference is {}x{} (or not finite); rendering it again",
+                path.display(),
+                img.width,
+                img.height
+            ),
+            Err(e) => eprintln!("warning: {e}; rendering the reference again"),
+        }
+    }
+    eprintln!(
+        "reference: path tracing {}x{} at {} spp on the CPU",
+        opts.width, opts.height, opts.ref_spp
+    );
+    let r = reference::render_full(scene, &settings);
+    if r.bad_samples > 0 {
+        eprintln!(
+            "warning: the reference dropped {} NaN/Inf samples",
+            r.bad_samples
+        );
+    }
+    std::fs::create_dir_all(&dir).map_err(|source| BenchError::Io {
+        path: dir.clone(),
+        source,
+    })?;
+    // The variance first: a reference found in the cache then always has its variance.
+    output::save(&r.variance, &var_path, 0.0)?;
+    output::save(&r.image, &path, 0.0)?;
+    eprintln!("reference: {:.1} s, cached {}", r.seconds, path.display());
+    let noise = noise_rel_mse(&r.image, &r.variance);
+    Ok((r.image, path, false, Some(noise)))
+}
+
+impl BenchOptions {
+    fn check(&self) -> Result<(), BenchError> {
+        let bad = |m: String| Err(BenchError::Options(m));
+        let (w, h) = (self.width, self.height);
+        if w == 0 || h == 0 || w > 16384 || h > 16384 {
+            return bad(format!("image size {w}x{h} is out of range (1 to 16384)"));
+        }
+        if !(1..=100_000).contains(&self.frames) {
+            return bad(format!(
+                "--frames {} is out of range (1 to 100000)",
+                self.frames
+            ));
+        }
+        if self.warmup > 100_000 {
+            return bad(format!(
+                "--warmup {} is out of range (0 to 100000)",
+                self.warmup
+            ));
+        }
+        if !(1..=1 << 20).contains(&self.ref_spp) {
+            return bad(format!(
+                "--ref-spp {} is out of range (1 to 1048576)",
+                self.ref_spp
+            ));
+        }
+        if !self.exposure.is_finite() {
+            return bad("--exposure must be finite".into());
+        }
+        if self.out_dir.as_os_str().is_empty() {
+            return bad("--out needs a directory".into());
+        }
+        if self.out_dir.exists() && !self.out_dir.is_dir() {
+            return bad(format!("{}: not a directory", self.out_dir.display()));
+        }
+        Ok(())
+    }
+}
+
+/// What one setting's frames measured, and its image.
+struct Measured {
+    passes: Vec<(String, Spread)>,
+    frame: Spread,
+    image: RadianceImage,
+}
+
+/// Warm-up frames, then `frames` timed ones, then one with readback for the image.
+fn measure(
+    ctx: &Arc<Context>,
+    scene: &Scene,
+    opts: &BenchOptions,
+    setting: &Setting,
+) -> Result<Measured, String> {
+    let settings = RenderSettings {
+        width: opts.width,
+        height: opts.height,
+        mode: Mode::Full,
+        timings: true,
+        gi: setting.gi.clone(),
+        ..Default::default()
+    };
+    let mut r = Renderer::new(ctx, scene, settings).map_err(|e| e.to_string())?;
+    for _ in 0..opts.warmup {
+        r.render(false).map_err(|e| e.to_string())?;
+    }
+    // Only the timed frames count (the first frame also voxelizes the static geometry).
+    r.frame_ms.clear();
+    if let Some(t) = r.timer.as_mut() {
+        t.samples.clear();
+    }
+    for _ in 0..opts.frames {
+        r.render(false).map_err(|e| e.to_string())?;
+    }
+    let passes = r
+        .timer
+        .as_ref()
+        .map(|t| {
+            t.samples
+                .iter()
+                .filter_map(|(name, v)| Spread::of(v).map(|s| (name.clone(), s)))
+                .collect()
+        })
+        .unwrap_or_default();
+    let frame = Spread::of(&r.frame_ms).ok_or("no frame was timed")?;
+    r.render(true).map_err(|e| e.to_string())?;
+    let image = RadianceImage {
+        width: opts.width,
+        height: opts.height,
+        pixels: r.radiance(),
+    };
+    Ok(Measured {
+        passes,
+        frame,
+        image,
+    })
+}
+
+/// Runs the benchmark and writes its outputs into `opts.out_dir` (all of them, or none on
+/// error; the reference cache is kept either way).
+pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
+    opts.check()?;
+    let settings = sweep::parse(&opts.sweep).map_err(|reason| BenchError::Sweep {
+        spec: opts.sweep.clone(),
+        reason,
+    })?;
+    let scene_bytes = std::fs::read(&opts.scene).map_err(|source| BenchError::Io {
+        path: opts.scene.clone(),
+        source,
+    })?;
+    let mut scene = scene::load(&opts.scene)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    scene.lights.extend(opts.extra_lights.iter().cloned());
+    if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.is_emissive()) {
+        eprintln!(
+            "warning: {}: no lights and no emission; every image is black",
+            opts.scene.display()
+        );
+    }
+
+    // The device first: a machine without one fails before the long reference render.
+    let ctx = Context::new(&ContextDesc {
+        validate: opts.validate,
+        device: opts.device.clone(),
+        ..Default::default()
+    })?;
+    let device = ctx.device_info.to_string();
+    eprintln!("device: {device}");
+    if ctx.timestamp_valid_bits == 0 {
+        eprintln!("warning: the device has no timestamps; only frame wall times");
+    }
+    let (reference, reference_path, reference_cached, reference_noise) =
+        reference(&scene, opts, &scene_bytes)?;
+
+    let n = settings.len();
+    let mut rows = Vec::with_capacity(n);
+    for (k, setting) in settings.iter().enumerate() {
+        let fail = |reason: String| BenchError::Setting {
+            label: setting.label.clone(),
+            reason,
+        };
+        let Measured {
+            passes,
+            frame,
+            image,
+        } = measure(&ctx, &scene, opts, setting).map_err(fail)?;
+        if opts.validate && ctx.stats.count() > 0 {
+            return Err(fail(format!(
+                "validation reported {} message(s)",
+                ctx.stats.count()
+            )));
+        }
+        let m = metrics::try_compare(&image, &reference, opts.exposure)
+            .map_err(|e| fail(e.to_string()))?;
+        eprintln!(
+            "[{}/{n}] {:<28} frame {:9.3} ms (min {:.3}, max {:.3})  relMSE {:.5}  FLIP {:.4}",
+            k + 1,
+            setting.label,
+            frame.median,
+            frame.min,
+            frame.max,
+            m.rel_mse,
+            m.flip
+        );
+        rows.push(Row {
+            index: k + 1,
+            label: setting.label.clone(),
+            gi: setting.gi.clone(),
+            passes,
+            frame,
+            metrics: m,
+            pareto: false,
+        });
+    }
+    drop(ctx);
+
+    let points: Vec<(f64, f64)> = rows
+        .iter()
+        .map(|r| (r.frame.median, r.metrics.rel_mse))
+        .collect();
+    for (row, on) in rows.iter_mut().zip(pareto::front(&points)) {
+        row.pareto = on;
+    }
+    let results = BenchResults {
+        options: opts.clone(),
+        device,
+        reference_path,
+        reference_cached,
+        reference_noise,
+        rows,
+    };
+    report::write_all(&results, &opts.out_dir)?;
+    eprintln!(
+        "wrote {}/{{results.csv, results.json, results.md, pareto.png}}",
+        opts.out_dir.display()
+    );
+    Ok(results)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shell_words_quote_what_a_shell_would_split() {
+        let w = |v: &[&str]| shell_words(&v.iter().map(|s| s.to_string()).collect::<Vec<_>>());
+        assert_eq!(w(&["voxgi", "bench", "a.gltf"]), "voxgi bench a.gltf");
+        assert_eq!(
+            w(&["--sweep", "voxels=32;paper=0,1"]),
+            "--sweep 'voxels=32;paper=0,1'"
+        );
+        assert_eq!(w(&["it's", ""]), "'it'\\''s' ''");
+    }
+
+    #[test]
+    fn spread_median_of_odd_and_even_counts() {
+        let s = Spread::of(&[3.0, 1.0, 2.0]).unwrap();
+        assert_eq!((s.median, s.min, s.max), (2.0, 1.0, 3.0));
+        assert_eq!(Spread::of(&[4.0, 1.0, 2.0, 3.0]).unwrap().median, 2.5);
+        assert!(Spread::of(&[]).is_none());
+    }
+
+    #[test]
+    fn reference_key_follows_content_and_settings() {
+        let s = ReferenceSettings {
+            width: 64,
+            height: 32,
+            spp: 16,
+            ..Default::default()
+        };
+        let k = reference_key(b"scene", &[], &s);
+        assert!(k.ends_with("-64x32-16"), "{k}");
+        assert_eq!(k, reference_key(b"scene", &[], &s));
+        assert_ne!(k, reference_key(b"scene!", &[], &s));
+        assert_ne!(
+            k,
+            reference_key(
+                b"scene",
+                &[],
+                &ReferenceSettings {
+                    seed: 1,
+                    ..s.clone()
+                }
+            )
+        );
+        let sun = Light {
+            name: None,
+            kind: crate::scene::LightKind::Directional,
+            radiance: glam::Vec3::splat(3.0),
+            range: None,
+            position: glam::Vec3::ZERO,
+            direction: glam::Vec3::NEG_Y,
+        };
+        assert_ne!(k, reference_key(b"scene", &[sun], &s));
+    }
+}
