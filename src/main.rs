@@ -13,8 +13,10 @@ const USAGE: &str = "\
 voxgi: real-time global illumination by deferred voxel shading, on Vulkan
 
 USAGE:
-  voxgi render [SCENE] [--out FILE] [--width W] [--height H] [--mode MODE]
-               [--frames N] [--exposure EV] [--shadow-res N]
+  voxgi render [SCENE] [--out FILE] [--width W] [--height H] [--mode MODE] [--mip L]
+               [--voxels N] [--bounces 1|2] [--paper] [--cones N] [--aperture DEG]
+               [--step F] [--voxel-shadows] [--cone-shadows]
+               [--frames N] [--exposure EV] [--shadow-res N] [--sun EL,AZ[,E]]
                [--validate] [--timings] [--device NAME]
   voxgi info SCENE [render options]
   voxgi reference [SCENE] [--spp N] [--out FILE.exr] [--width W] [--height H] [--seed S]
