@@ -75,9 +75,14 @@ pub fn quad(scene: &mut Scene, corners: [Vec3; 4], material: u32) {
     scene
         .indices
         .extend([base, base + 1, base + 2, base, base + 2, base + 3]);
+    add_instance(scene, first, 6, material, bounds);
+}
+
+/// Adds indices [first, first + count) as a primitive placed once, at the identity.
+fn add_instance(scene: &mut Scene, first: u32, count: u32, material: u32, bounds: Aabb) -> usize {
     scene.primitives.push(Primitive {
         first_index: first,
-        index_count: 6,
+        index_count: count,
         material,
         bounds,
     });
@@ -88,6 +93,7 @@ pub fn quad(scene: &mut Scene, corners: [Vec3; 4], material: u32) {
         world: Mat4::IDENTITY,
     });
     scene.bounds = scene.bounds.union(&bounds);
+    scene.instances.len() - 1
 }
 
 /// A horizontal square floor of half-size `h` at y = 0, facing +Y.
@@ -191,20 +197,7 @@ pub fn triangle(scene: &mut Scene, p: [Vec3; 3], uv: [[f32; 2]; 3], material: u3
     }
     let first = scene.indices.len() as u32;
     scene.indices.extend([base, base + 1, base + 2]);
-    scene.primitives.push(Primitive {
-        first_index: first,
-        index_count: 3,
-        material,
-        bounds,
-    });
-    scene.instances.push(Instance {
-        primitive: scene.primitives.len() as u32 - 1,
-        node: scene.instances.len(),
-        node_name: None,
-        world: Mat4::IDENTITY,
-    });
-    scene.bounds = scene.bounds.union(&bounds);
-    scene.instances.len() - 1
+    add_instance(scene, first, 3, material, bounds)
 }
 
 /// Renders `frames` frames under validation and reads the voxels back.
