@@ -1,26 +1,10 @@
 //! `voxgi bench` end to end on the bundled Cornell box: every output file is written and
 //! parses, and the second run takes the reference from the cache. Bad input fails cleanly.
 
+mod common;
+use common::{temp_dir, voxgi};
+
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn voxgi(args: &[&str]) -> (bool, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_voxgi"))
-        .args(args)
-        .output()
-        .expect("run voxgi");
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(!stderr.contains("panicked"), "voxgi panicked:\n{stderr}");
-    (out.status.success(), stderr)
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("voxgi-bench-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 fn bundled_scene() -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -53,7 +37,7 @@ fn tiny_bench_writes_every_output_and_reuses_the_reference() {
         "8",
         "--validate",
     ];
-    let (ok, err) = voxgi(&args);
+    let (ok, _, err) = voxgi(&args);
     assert!(ok, "bench failed:\n{err}");
     assert!(
         err.contains("reference: path tracing 64x64 at 8 spp"),
@@ -125,7 +109,7 @@ fn tiny_bench_writes_every_output_and_reuses_the_reference() {
         .unwrap();
     assert!(reference.to_string_lossy().ends_with("-64x64-8.exr"));
     let mtime = std::fs::metadata(reference).unwrap().modified().unwrap();
-    let (ok, err) = voxgi(&args);
+    let (ok, _, err) = voxgi(&args);
     assert!(ok, "second bench failed:\n{err}");
     assert!(err.contains("reference: cached"), "{err}");
     assert!(!err.contains("path tracing"), "{err}");
@@ -172,7 +156,7 @@ fn bad_input_fails_cleanly_and_writes_nothing() {
         ),
         (vec!["bench", "--out", o], "one scene"),
     ] {
-        let (ok, err) = voxgi(&args);
+        let (ok, _, err) = voxgi(&args);
         assert!(!ok, "{args:?} succeeded");
         assert!(err.contains(expect), "{args:?}: {err}");
         assert!(!out.exists(), "{args:?} left {}", out.display());

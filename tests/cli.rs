@@ -1,24 +1,8 @@
 //! The command line: renders the bundled scene, and bad input gives a clear error that names
 //! the file, a non-zero exit, no panic and no output file.
 
-use std::path::PathBuf;
-use std::process::Command;
-
-fn voxgi(args: &[&str]) -> (bool, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_voxgi"))
-        .args(args)
-        .output()
-        .expect("run voxgi");
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(!stderr.contains("panicked"), "voxgi panicked:\n{stderr}");
-    (out.status.success(), stderr)
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("voxgi-cli-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+mod common;
+use common::{temp_dir, voxgi};
 
 #[test]
 fn renders_the_bundled_scene_to_exr_and_png() {
@@ -26,7 +10,7 @@ fn renders_the_bundled_scene_to_exr_and_png() {
     let exr = dir.join("box.exr");
     let png = dir.join("box.png");
     for out in [&exr, &png] {
-        let (ok, err) = voxgi(&[
+        let (ok, _, err) = voxgi(&[
             "render",
             "--out",
             out.to_str().unwrap(),
@@ -74,7 +58,7 @@ fn bad_input_is_a_clear_error_with_no_output() {
         (vec!["render", "--mode", "sideways", "--out", o], "sideways"),
         (vec!["render", "--bogus"], "--bogus"),
     ] {
-        let (ok, err) = voxgi(&args);
+        let (ok, _, err) = voxgi(&args);
         assert!(!ok, "{args:?} succeeded");
         assert!(
             err.contains(needle),

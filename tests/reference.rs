@@ -9,7 +9,6 @@ use glam::{Mat4, Vec3};
 use gpu::{empty_scene, floor, lambert, light, quad, top_camera};
 use std::f32::consts::PI;
 use std::path::PathBuf;
-use std::process::Command;
 use voxgi::output::RadianceImage;
 use voxgi::reference::{render, render_full, ReferenceOutput, ReferenceSettings};
 use voxgi::scene::*;
@@ -622,20 +621,6 @@ fn seeds_are_reproducible_and_agree_within_noise() {
     );
 }
 
-fn voxgi(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_voxgi"))
-        .args(args)
-        .output()
-        .expect("run voxgi");
-    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
-    assert!(!stderr.contains("panicked"), "voxgi panicked:\n{stderr}");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        stderr,
-    )
-}
-
 #[test]
 fn cli_reference_writes_exr_and_compare_prints_json() {
     let dir = common::temp_dir("reference-cli");
@@ -643,7 +628,7 @@ fn cli_reference_writes_exr_and_compare_prints_json() {
     let s = scene.to_str().unwrap();
     let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
     for (out, seed) in [(&a, "1"), (&b, "2")] {
-        let (ok, _, err) = voxgi(&[
+        let (ok, _, err) = common::voxgi(&[
             "reference",
             s,
             "--spp",
@@ -663,7 +648,7 @@ fn cli_reference_writes_exr_and_compare_prints_json() {
     assert_eq!((img.width, img.height), (20, 16));
     assert!(!img.has_non_finite() && img.pixels.iter().any(|p| p[0] > 0.0));
 
-    let (ok, stdout, err) = voxgi(&["compare", a.to_str().unwrap(), b.to_str().unwrap()]);
+    let (ok, stdout, err) = common::voxgi(&["compare", a.to_str().unwrap(), b.to_str().unwrap()]);
     assert!(ok, "compare failed:\n{err}");
     assert_eq!(stdout.lines().count(), 1, "not one line: {stdout}");
     let json: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
@@ -673,7 +658,7 @@ fn cli_reference_writes_exr_and_compare_prints_json() {
             .unwrap_or_else(|| panic!("{key} in {stdout}"));
         assert!(v > 0.0 && v.is_finite(), "{key} = {v}");
     }
-    let (ok, stdout, _) = voxgi(&["compare", a.to_str().unwrap(), a.to_str().unwrap()]);
+    let (ok, stdout, _) = common::voxgi(&["compare", a.to_str().unwrap(), a.to_str().unwrap()]);
     assert!(ok);
     let json: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
     assert_eq!(json["relMSE"].as_f64(), Some(0.0));
@@ -686,7 +671,7 @@ fn cli_bad_input_fails_cleanly() {
     let scene = cornell_scene(&dir);
     let s = scene.to_str().unwrap();
     let small = dir.join("small.exr");
-    let (ok, _, err) = voxgi(&[
+    let (ok, _, err) = common::voxgi(&[
         "reference",
         s,
         "--spp",
@@ -734,7 +719,7 @@ fn cli_bad_input_fails_cleanly() {
         (vec!["compare", sm, ot], "size"),
         (vec!["compare", sm], "two images"),
     ] {
-        let (ok, stdout, err) = voxgi(&args);
+        let (ok, stdout, err) = common::voxgi(&args);
         assert!(!ok, "{args:?} succeeded");
         assert!(stdout.is_empty(), "{args:?} printed {stdout}");
         assert!(

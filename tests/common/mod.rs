@@ -9,10 +9,22 @@ pub fn scenes_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes")
 }
 
+/// Runs the voxgi binary; fails the test if it panicked. Returns (success, stdout, stderr).
+pub fn voxgi(args: &[&str]) -> (bool, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_voxgi"))
+        .args(args)
+        .output()
+        .expect("run voxgi");
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!stderr.contains("panicked"), "voxgi panicked:\n{stderr}");
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    (out.status.success(), stdout, stderr)
+}
+
 /// A fresh, empty directory for one test's fixtures, under target/tmp.
 pub fn temp_dir(test: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR"))
-        .join(format!("voxgi-scene-{test}-{}", std::process::id()));
+    let dir =
+        Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("voxgi-{test}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
