@@ -22,6 +22,7 @@ USAGE:
   voxgi reference [SCENE] [--spp N] [--out FILE.exr] [--width W] [--height H] [--seed S]
                   [--sun EL,AZ[,E]]
   voxgi compare A.exr REFERENCE.exr [--exposure EV]
+  voxgi hard-cases [NAME..] [--size N] [--voxels N] [--ref-spp N] [--out FILE.md]
   voxgi bench SCENE [--sweep SPEC] [--out DIR] [--width W --height H] [--frames N]
               [--warmup N] [--ref-spp N] [--sun EL,AZ[,E]] [--exposure EV] [--validate]
 
@@ -32,8 +33,9 @@ USAGE:
                with shadows, plus emission; indirect; ao; voxels-albedo, voxels-normal,
                voxels-emission, voxels-radiance: the first voxel along each ray
   --mip L      with voxels-radiance: the directional volumes at mip level L
-  --voxels N   voxels per side of the grid (default 128)
-  --bounces B  1: direct light in the voxels; 2 (default): plus a second bounce
+  --voxels N   voxels per side of the grid (default 64)
+  --bounces B  1: direct light in the voxels; 2: plus a second bounce; auto (default): 2 when
+               the scene has emissive surfaces, else 1
   --paper      the original's behaviour and constants (RGBA8 averages and volumes, 6 cones)
   --cones N, --aperture DEG, --step F   diffuse cones per pixel (6), their aperture (60),
                step as a fraction of the cone diameter (0.5)
@@ -49,6 +51,11 @@ USAGE:
   --timings    print each pass's median GPU time
   --device NAME           use the Vulkan device whose name contains NAME
   reference    CPU path-traced ground truth (all cores; --spp default 64, --seed default 0)
+  hard-cases   runs the hard cases (light leaks, density, precision, degenerate input,
+               extreme lights, cones at the edges; all of them or those named), each with
+               --paper and the defaults at --voxels (default 64) and --size (default 64)
+               pixels, under validation; prints (and writes to --out) the markdown table of
+               docs/hard-cases.md; fails when a default setting misses its goal
   compare      prints one JSON line: relMSE, MAE, RMSE (radiance) and FLIP (display images)
   bench        times each setting of a sweep (per-pass GPU medians and frame wall time over
                --frames, default 10, after --warmup, default 2) and measures its error
@@ -103,6 +110,7 @@ const VALUED: &[&str] = &[
     "--sweep",
     "--warmup",
     "--ref-spp",
+    "--size",
 ];
 
 impl Args {
@@ -247,9 +255,12 @@ fn gi_settings(args: &Args) -> Result<GiSettings> {
             ..Default::default()
         }
     };
-    gi.bounces = args.number("--bounces", gi.bounces)?;
-    if !(1..=2).contains(&gi.bounces) {
-        bail!("--bounces must be 1 or 2");
+    gi.bounces = match args.value("--bounces") {
+        Some("auto") => 0,
+        _ => args.number("--bounces", gi.bounces)?,
+    };
+    if gi.bounces > 2 {
+        bail!("--bounces must be 1, 2 or auto");
     }
     gi.cone_count = args.number("--cones", gi.cone_count)?;
     if !(1..=16).contains(&gi.cone_count) {
@@ -546,6 +557,68 @@ fn bench(args: &Args) -> Result<()> {
     Ok(())
 }
 
+/// `voxgi hard-cases`: every case (or those named) with --paper and with the defaults.
+fn hard_cases(args: &Args) -> Result<()> {
+    use voxgi::hard::{self, Env, Row, CASES};
+    for name in &args.positional {
+        if !CASES.iter().any(|c| c.name == name) {
+            let names: Vec<&str> = CASES.iter().map(|c| c.name).collect();
+            bail!("no hard case {name:?} (the cases: {})", names.join(", "));
+        }
+    }
+    let ctx = Context::new(&ContextDesc {
+        validate: true,
+        device: args.value("--device").map(String::from),
+        ..Default::default()
+    })?;
+    let mut env = Env::new(
+        ctx,
+        args.number("--size", 64)?,
+        args.number("--voxels", 64)?,
+        args.number("--ref-spp", 256)?,
+    )?;
+    let mut rows = Vec::new();
+    for case in CASES
+        .iter()
+        .filter(|c| args.positional.is_empty() || args.positional.iter().any(|n| n == c.name))
+    {
+        let paper = env.run(case, &env.settings(true));
+        let default = env.run(case, &env.settings(false));
+        eprintln!(
+            "{:24} paper {:>12.5}  default {:>12.5}  goal {}{}",
+            case.name,
+            paper.value,
+            default.value,
+            case.goal,
+            if default.passed(case.goal) {
+                ""
+            } else {
+                "  FAILS"
+            }
+        );
+        rows.push(Row {
+            case,
+            paper,
+            default,
+        });
+    }
+    let table = hard::table(&rows);
+    print!("{table}");
+    if let Some(out) = args.value("--out") {
+        output::write_bytes_atomic(Path::new(out), table.as_bytes())
+            .with_context(|| format!("writing {out}"))?;
+    }
+    let failed: Vec<&str> = rows
+        .iter()
+        .filter(|r| !r.default.passed(r.case.goal))
+        .map(|r| r.case.name)
+        .collect();
+    if !failed.is_empty() {
+        bail!("the defaults miss the goal of: {}", failed.join(", "));
+    }
+    Ok(())
+}
+
 fn run() -> Result<()> {
     let argv: Vec<String> = std::env::args().skip(1).collect();
     let Some(cmd) = argv.first() else {
@@ -563,6 +636,7 @@ fn run() -> Result<()> {
         "reference" => reference(&args),
         "compare" => compare(&args),
         "bench" => bench(&args),
+        "hard-cases" => hard_cases(&args),
         "--help" | "-h" | "help" => {
             print!("{USAGE}");
             Ok(())

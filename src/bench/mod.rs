@@ -463,7 +463,8 @@ pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
         rows.push(Row {
             index: k + 1,
             label: setting.label.clone(),
-            gi: setting.gi.clone(),
+            // What ran: `bounces` auto decided for this scene.
+            gi: setting.gi.resolved(scene.has_emission()),
             passes,
             frame,
             metrics: m,
