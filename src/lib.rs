@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod gi;
+pub mod hard;
 pub mod metrics;
 pub mod output;
 pub mod reference;

@@ -83,6 +83,13 @@ fn write_atomic(
     Ok(())
 }
 
+/// Writes `bytes` to `path` through a temporary file, so that no half-written file is left.
+pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    write_atomic(path, |tmp| {
+        std::fs::write(tmp, bytes).map_err(|e| e.to_string())
+    })
+}
+
 /// Writes `.exr` (radiance) or `.png` (display image), chosen by the extension.
 pub fn save(img: &RadianceImage, path: &Path, exposure: f32) -> Result<(), OutputError> {
     let ext = path

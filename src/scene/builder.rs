@@ -269,6 +269,29 @@ impl SceneBuilder {
         self.cameras.len() - 1
     }
 
+    /// Multiplies the intensity of every point and spot light (e.g. by s^2 when the scene is
+    /// scaled by s, so that irradiance stays the same).
+    pub fn scale_punctual_intensities(&mut self, factor: f32) {
+        for l in &mut self.lights {
+            if l.kind != LightType::Directional {
+                l.intensity *= factor;
+            }
+        }
+    }
+
+    /// Makes `root` the parent of every node that had none.
+    pub fn wrap_roots(&mut self, mut root: NodeDesc) -> usize {
+        let mut is_child = vec![false; self.nodes.len()];
+        for n in &self.nodes {
+            for &c in &n.children {
+                is_child[c] = true;
+            }
+        }
+        root.children
+            .extend((0..self.nodes.len()).filter(|&i| !is_child[i]));
+        self.add_node(root)
+    }
+
     /// The document as `.gltf` JSON text with the buffer embedded.
     pub fn to_gltf(&self) -> String {
         self.json_and_bin(true).0

@@ -1,0 +1,366 @@
+//! Hard cases: generated scenes where voxel GI is known to break (light leaks, density,
+//! precision, degenerate input, extreme lights and emission, cones at the edges), each with one
+//! measured property and a goal, run with the project's defaults and with `--paper`.
+//!
+//! Every run also checks what no case may do: non-finite pixels or voxels (read back from the
+//! volumes) and validation messages. `voxgi hard-cases` writes the table of docs/hard-cases.md;
+//! tests/hard_cases.rs asserts the goals at the default settings.
+
+mod cases;
+pub mod scenes;
+
+pub use cases::CASES;
+
+use crate::gi::GiSettings;
+use crate::output::RadianceImage;
+use crate::reference::{self, ReferenceSettings};
+use crate::render::{Mode, RenderSettings, Renderer};
+use crate::scene::builder::SceneBuilder;
+use crate::scene::{Camera, Scene};
+use crate::vk::Context;
+use anyhow::{Context as _, Result};
+use glam::Mat4;
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// What a case's value must satisfy.
+#[derive(Clone, Copy, Debug)]
+pub enum Goal {
+    AtMost(f64),
+}
+
+impl Goal {
+    pub fn met(self, value: f64) -> bool {
+        match self {
+            Goal::AtMost(g) => value <= g,
+        }
+    }
+}
+
+impl std::fmt::Display for Goal {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Goal::AtMost(g) => write!(f, "<= {g}"),
+        }
+    }
+}
+
+/// One hard case.
+pub struct Case {
+    pub name: &'static str,
+    pub group: &'static str,
+    /// What the scene holds and what is measured.
+    pub what: &'static str,
+    /// The measured quantity, e.g. "leak ratio".
+    pub metric: &'static str,
+    pub goal: Goal,
+    pub run: fn(&mut Env, &GiSettings) -> Result<f64>,
+}
+
+/// Where the cases run: a context, image and grid sizes, the reference's sample count.
+pub struct Env {
+    pub ctx: Arc<Context>,
+    pub size: u32,
+    pub voxels: u32,
+    pub ref_spp: u32,
+    scratch: PathBuf,
+    /// Non-finite pixels or voxels met by the current case.
+    non_finite: Vec<String>,
+    /// Loader warnings met by the current case.
+    pub warnings: Vec<String>,
+    dumped: usize,
+}
+
+/// The outcome of one case at one setting.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    pub value: f64,
+    /// Non-finite values found (pixels or voxels), described.
+    pub non_finite: Vec<String>,
+    pub validation_messages: usize,
+    /// An error instead of a value (e.g. a grid too large for the device).
+    pub error: Option<String>,
+}
+
+impl Outcome {
+    pub fn passed(&self, goal: Goal) -> bool {
+        self.error.is_none()
+            && self.non_finite.is_empty()
+            && self.validation_messages == 0
+            && goal.met(self.value)
+    }
+}
+
+impl Env {
+    pub fn new(ctx: Arc<Context>, size: u32, voxels: u32, ref_spp: u32) -> Result<Env> {
+        let scratch = std::env::temp_dir().join(format!("voxgi-hard-{}", std::process::id()));
+        std::fs::create_dir_all(&scratch)
+            .with_context(|| format!("creating {}", scratch.display()))?;
+        Ok(Env {
+            ctx,
+            size,
+            voxels,
+            ref_spp,
+            scratch,
+            non_finite: Vec::new(),
+            warnings: Vec::new(),
+            dumped: 0,
+        })
+    }
+
+    /// The settings a case runs at: the defaults or the paper's, at the environment's grid.
+    pub fn settings(&self, paper: bool) -> GiSettings {
+        if paper {
+            GiSettings::paper(self.voxels)
+        } else {
+            GiSettings {
+                voxels: self.voxels,
+                ..GiSettings::default()
+            }
+        }
+    }
+
+    /// Runs one case; errors become part of the outcome.
+    pub fn run(&mut self, case: &Case, gi: &GiSettings) -> Outcome {
+        self.non_finite.clear();
+        self.warnings.clear();
+        let before = self.ctx.stats.count();
+        let result = (case.run)(self, gi);
+        let validation_messages = self.ctx.stats.count() - before;
+        let (value, error) = match result {
+            Ok(v) => (v, None),
+            Err(e) => (f64::NAN, Some(format!("{e:#}"))),
+        };
+        Outcome {
+            value,
+            non_finite: std::mem::take(&mut self.non_finite),
+            validation_messages,
+            error,
+        }
+    }
+
+    /// Writes `b` as a .glb and loads it back, as a user's file would be.
+    pub fn load(&mut self, name: &str, b: &SceneBuilder) -> Result<Scene> {
+        let path = self.scratch.join(format!("{name}.glb"));
+        std::fs::write(&path, b.to_glb()).with_context(|| format!("writing {}", path.display()))?;
+        let scene = crate::scene::load(&path)?;
+        self.warnings.extend(scene.warnings.iter().cloned());
+        Ok(scene)
+    }
+
+    /// With VOXGI_HARD_DUMP=DIR, every image a case makes is saved there (.exr), in order.
+    fn dump(&mut self, what: &str, img: &RadianceImage) {
+        if let Some(dir) = std::env::var_os("VOXGI_HARD_DUMP") {
+            self.dumped += 1;
+            let path = PathBuf::from(dir).join(format!("{:03}-{what}.exr", self.dumped));
+            for p in [path.clone(), path.with_extension("png")] {
+                if let Err(e) = crate::output::save(img, &p, 0.0) {
+                    eprintln!("VOXGI_HARD_DUMP: {e}");
+                }
+            }
+        }
+    }
+
+    fn check_image(&mut self, what: &str, img: &RadianceImage) {
+        self.dump(what, img);
+        let bad = img
+            .pixels
+            .iter()
+            .filter(|p| p.iter().any(|c| !c.is_finite()))
+            .count();
+        if bad > 0 {
+            self.non_finite
+                .push(format!("{what}: {bad} non-finite pixels"));
+        }
+    }
+
+    /// Renders `scene` from `camera` and checks the image and the volumes for non-finite values.
+    pub fn render(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        gi: &GiSettings,
+    ) -> Result<RadianceImage> {
+        self.render_with(scene, camera, gi, Mode::Full, |_| Ok(()))
+    }
+
+    /// [`Env::render`], with `before` run on the renderer after a first frame (then a second
+    /// frame is rendered), and a render mode.
+    pub fn render_with(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        gi: &GiSettings,
+        mode: Mode,
+        before: impl FnOnce(&mut Renderer) -> Result<()>,
+    ) -> Result<RadianceImage> {
+        self.render_dynamic(scene, camera, gi, mode, Vec::new(), before)
+    }
+
+    pub fn render_dynamic(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        gi: &GiSettings,
+        mode: Mode,
+        dynamic_nodes: Vec<usize>,
+        before: impl FnOnce(&mut Renderer) -> Result<()>,
+    ) -> Result<RadianceImage> {
+        let settings = RenderSettings {
+            width: self.size,
+            height: self.size,
+            mode,
+            shadow_resolution: 512,
+            gi: gi.clone(),
+            dynamic_nodes,
+            ..RenderSettings::default()
+        };
+        let mut r = Renderer::new(&self.ctx, scene, settings)?;
+        r.camera = camera.clone();
+        r.render(false)?;
+        before(&mut r)?;
+        r.render(true)?;
+        let img = RadianceImage {
+            width: self.size,
+            height: self.size,
+            pixels: r.radiance(),
+        };
+        self.check_image("image", &img);
+        if let Some(v) = r.read_voxels()? {
+            let mut bad = 0;
+            for i in 0..v.filled.len() {
+                let finite = v.albedo[i].is_finite()
+                    && v.normal[i].is_finite()
+                    && v.emission[i].is_finite()
+                    && v.radiance.as_ref().is_none_or(|r| r[i].is_finite());
+                bad += usize::from(!finite);
+            }
+            if bad > 0 {
+                self.non_finite
+                    .push(format!("volumes: {bad} non-finite voxels"));
+            }
+        }
+        Ok(img)
+    }
+
+    /// The reference path tracer's image of `scene` from `camera`.
+    pub fn reference(&mut self, scene: &Scene, camera: &Camera) -> RadianceImage {
+        let mut s = scene.clone();
+        s.camera = camera.clone();
+        let img = reference::render(
+            &s,
+            &ReferenceSettings {
+                width: self.size,
+                height: self.size,
+                spp: self.ref_spp,
+                ..Default::default()
+            },
+        );
+        self.check_image("reference", &img);
+        img
+    }
+
+    /// relMSE of the real-time image of `scene` against the reference.
+    pub fn error_vs_reference(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        gi: &GiSettings,
+    ) -> Result<f64> {
+        let img = self.render(scene, camera, gi)?;
+        let reference = self.reference(scene, camera);
+        Ok(crate::metrics::compare(&img, &reference).rel_mse)
+    }
+}
+
+impl Drop for Env {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.scratch);
+    }
+}
+
+/// Mean of the three channels over all pixels.
+pub fn mean(img: &RadianceImage) -> f64 {
+    let sum: f64 = img
+        .pixels
+        .iter()
+        .map(|p| (p[0] as f64 + p[1] as f64 + p[2] as f64) / 3.0)
+        .sum();
+    sum / img.pixels.len().max(1) as f64
+}
+
+/// The largest channel value of any pixel.
+pub fn max(img: &RadianceImage) -> f64 {
+    img.pixels
+        .iter()
+        .flat_map(|p| p.iter())
+        .fold(0.0f64, |m, &c| m.max(c as f64))
+}
+
+/// relMSE of `a` against `b` (per CONVENTIONS.md).
+pub fn rel_mse(a: &RadianceImage, b: &RadianceImage) -> f64 {
+    crate::metrics::compare(a, b).rel_mse
+}
+
+/// `img` times `k`.
+pub fn scaled(img: &RadianceImage, k: f32) -> RadianceImage {
+    RadianceImage {
+        pixels: img.pixels.iter().map(|p| p.map(|c| c * k)).collect(),
+        ..img.clone()
+    }
+}
+
+/// A node's world transform, for moving it.
+pub fn node_of(scene: &Scene, name: &str) -> Result<(usize, Mat4)> {
+    scene
+        .instances
+        .iter()
+        .find(|i| i.node_name.as_deref() == Some(name))
+        .map(|i| (i.node, i.world))
+        .with_context(|| format!("no node {name:?}"))
+}
+
+/// One row of the report.
+pub struct Row {
+    pub case: &'static Case,
+    pub paper: Outcome,
+    pub default: Outcome,
+}
+
+fn cell(o: &Outcome, goal: Goal) -> String {
+    let mut s = if let Some(e) = &o.error {
+        format!("error: {}", e.replace('|', "/").replace('\n', " "))
+    } else {
+        format!("{:.4}", o.value)
+    };
+    if !o.non_finite.is_empty() {
+        s.push_str(&format!(" ({})", o.non_finite.join("; ")));
+    }
+    if o.validation_messages > 0 {
+        s.push_str(&format!(" ({} validation messages)", o.validation_messages));
+    }
+    let mark = if o.passed(goal) { "pass" } else { "**fail**" };
+    format!("{s} {mark}")
+}
+
+/// The markdown table of docs/hard-cases.md.
+pub fn table(rows: &[Row]) -> String {
+    let mut s = String::from(
+        "| case | group | scene and measure | metric | goal | --paper | default |\n\
+         |---|---|---|---|---|---|---|\n",
+    );
+    for r in rows {
+        let c = r.case;
+        s.push_str(&format!(
+            "| `{}` | {} | {} | {} | {} | {} | {} |\n",
+            c.name,
+            c.group,
+            c.what,
+            c.metric,
+            c.goal,
+            cell(&r.paper, c.goal),
+            cell(&r.default, c.goal)
+        ));
+    }
+    s
+}

@@ -1,0 +1,306 @@
+//! The hard cases' scenes, generated with the glTF builder so that they go through the loader
+//! like any user's file.
+
+use crate::scene::builder::*;
+use crate::scene::Camera;
+use glam::{Mat4, Vec3};
+
+pub const WHITE: [f32; 3] = [0.8, 0.8, 0.8];
+
+/// Camera-to-world for an eye looking at `target` (+Y up, or +Z when looking along Y).
+pub fn look_at(eye: Vec3, target: Vec3, yfov_deg: f32, znear: f32) -> Camera {
+    let dir = (target - eye).normalize();
+    let up = if dir.cross(Vec3::Y).length() < 1e-3 {
+        Vec3::NEG_Z
+    } else {
+        Vec3::Y
+    };
+    Camera {
+        name: None,
+        world: Mat4::look_at_rh(eye, target, up).inverse(),
+        yfov: yfov_deg.to_radians(),
+        znear,
+        zfar: znear * 1e5,
+        is_default: false,
+    }
+}
+
+/// The six inward faces of the box `lo`..`hi`.
+pub fn inward_box(lo: [f32; 3], hi: [f32; 3], material: usize) -> PrimitiveDesc {
+    let mut faces = Vec::new();
+    for axis in 0..3 {
+        for (side, at) in [(1.0, lo[axis]), (-1.0, hi[axis])] {
+            faces.push(slab_face(lo, hi, axis, at, side, material));
+        }
+    }
+    merge(&faces)
+}
+
+/// The face of the box `lo`..`hi` that lies in the plane `x[axis] = at`, facing `side` along
+/// that axis.
+pub fn slab_face(
+    lo: [f32; 3],
+    hi: [f32; 3],
+    axis: usize,
+    at: f32,
+    side: f32,
+    material: usize,
+) -> PrimitiveDesc {
+    let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+    let corner = |a: f32, b: f32| {
+        let mut p = [0.0; 3];
+        p[axis] = at;
+        p[u] = a;
+        p[v] = b;
+        p
+    };
+    let mut n = [0.0; 3];
+    n[axis] = side;
+    quad(
+        [
+            corner(lo[u], lo[v]),
+            corner(hi[u], lo[v]),
+            corner(hi[u], hi[v]),
+            corner(lo[u], hi[v]),
+        ],
+        n,
+        Some(material),
+    )
+}
+
+/// Two closed rooms of 2 m side split along `axis` by a partition of `thickness` (0: two
+/// opposite faces in one plane). A point light of 2 W/sr in the room on the negative side.
+/// Returns the scene and the camera of each room (lit, dark).
+pub fn two_rooms(axis: usize, thickness: f32) -> (SceneBuilder, Camera, Camera) {
+    let mut b = SceneBuilder::new();
+    let white = b.add_material(MaterialDesc::lambertian("white", WHITE));
+    let mut lo = [-1.0, 0.0, -1.0];
+    let mut hi = [1.0, 2.0, 1.0];
+    let mid = if axis == 1 { 2.0 } else { 0.0 };
+    lo[axis] = mid - 2.0;
+    hi[axis] = mid + 2.0;
+    if axis == 1 {
+        lo[1] = 0.0;
+        hi[1] = 4.0;
+    }
+    let t = 0.5 * thickness;
+    let walls = merge(&[
+        inward_box(lo, hi, white),
+        slab_face(lo, hi, axis, mid - t, -1.0, white),
+        slab_face(lo, hi, axis, mid + t, 1.0, white),
+    ]);
+    let mesh = b.add_mesh("rooms", vec![walls]);
+    b.add_node(NodeDesc::new("rooms").mesh(mesh));
+    let centre = |side: f32| {
+        let c = Vec3::from(lo).lerp(Vec3::from(hi), 0.5);
+        let mut c = c.to_array();
+        c[axis] = mid + side;
+        Vec3::from(c)
+    };
+    let light = b.add_light(LightDesc::new("light", LightType::Point, [1.0; 3], 2.0));
+    let lit = centre(-1.0);
+    b.add_node(
+        NodeDesc::new("light")
+            .light(light)
+            .translation((lit + Vec3::new(0.0, 0.3, 0.0)).to_array()),
+    );
+    let camera = |c: Vec3| {
+        look_at(
+            c + Vec3::new(0.0, 0.0, 0.9),
+            c + Vec3::new(0.0, -0.3, -1.0),
+            70.0,
+            0.01,
+        )
+    };
+    (b, camera(lit), camera(centre(1.0)))
+}
+
+/// What lights the test room.
+#[derive(Clone, Copy, Debug)]
+pub enum RoomLight {
+    None,
+    /// A point light of this intensity (W/sr) under the ceiling.
+    Point(f32),
+    /// A spot under the ceiling pointing down, inner and outer cone angles (radians).
+    Spot(f32, f32),
+    /// An emissive panel of this strength under the ceiling, `side` metres square.
+    Panel {
+        strength: f32,
+        side: f32,
+    },
+}
+
+/// A 2 m Cornell-type room, open at the front (+Z), with two boxes, and a camera in front.
+pub fn room(light: RoomLight) -> (SceneBuilder, Camera) {
+    let mut b = SceneBuilder::new();
+    let white = b.add_material(MaterialDesc::lambertian("white", WHITE));
+    let red = b.add_material(MaterialDesc::lambertian("red", [0.63, 0.065, 0.05]));
+    let green = b.add_material(MaterialDesc::lambertian("green", [0.14, 0.45, 0.091]));
+    let (lo, hi) = ([-1.0, 0.0, -1.0], [1.0, 2.0, 1.0]);
+    let white_walls = merge(&[
+        slab_face(lo, hi, 1, 0.0, 1.0, white),
+        slab_face(lo, hi, 1, 2.0, -1.0, white),
+        slab_face(lo, hi, 2, -1.0, 1.0, white),
+    ]);
+    let room = b.add_mesh(
+        "room",
+        vec![
+            white_walls,
+            slab_face(lo, hi, 0, -1.0, 1.0, red),
+            slab_face(lo, hi, 0, 1.0, -1.0, green),
+        ],
+    );
+    b.add_node(NodeDesc::new("room").mesh(room));
+    let cube = b.add_mesh("box", vec![unit_cube(Some(white))]);
+    b.add_node(
+        NodeDesc::new("tall box")
+            .mesh(cube)
+            .translation([-0.4, 0.6, -0.3])
+            .rotation([0.0, 0.15643446, 0.0, 0.98768834])
+            .scale([0.6, 1.2, 0.6]),
+    );
+    b.add_node(
+        NodeDesc::new("short box")
+            .mesh(cube)
+            .translation([0.4, 0.3, 0.35])
+            .rotation([0.0, -0.15643446, 0.0, 0.98768834])
+            .scale([0.6, 0.6, 0.6]),
+    );
+    let top = [0.0, 1.8, 0.0];
+    // Pointing down: -Z turned onto -Y (a quarter turn about +X).
+    let down = [
+        -std::f32::consts::FRAC_1_SQRT_2,
+        0.0,
+        0.0,
+        std::f32::consts::FRAC_1_SQRT_2,
+    ];
+    match light {
+        RoomLight::None => {}
+        RoomLight::Point(i) => {
+            let l = b.add_light(LightDesc::new("point", LightType::Point, [1.0; 3], i));
+            b.add_node(NodeDesc::new("point").light(l).translation(top));
+        }
+        RoomLight::Spot(inner, outer) => {
+            let kind = LightType::Spot {
+                inner_cone_angle: inner,
+                outer_cone_angle: outer,
+            };
+            let l = b.add_light(LightDesc::new("spot", kind, [1.0; 3], 4.0));
+            b.add_node(
+                NodeDesc::new("spot")
+                    .light(l)
+                    .translation(top)
+                    .rotation(down),
+            );
+        }
+        RoomLight::Panel { strength, side } => {
+            let m = b.add_material(
+                MaterialDesc::lambertian("emitter", WHITE).emissive([1.0; 3], strength),
+            );
+            let (s, y) = (0.5 * side, 1.99);
+            let panel = quad(
+                [[-s, y, -s], [s, y, -s], [s, y, s], [-s, y, s]],
+                [0.0, -1.0, 0.0],
+                Some(m),
+            );
+            let mesh = b.add_mesh("panel", vec![panel]);
+            b.add_node(NodeDesc::new("panel").mesh(mesh));
+        }
+    }
+    let camera = look_at(
+        Vec3::new(0.0, 1.0, 3.7),
+        Vec3::new(0.0, 1.0, 0.0),
+        40.0,
+        0.05,
+    );
+    (b, camera)
+}
+
+/// A 4 m floor with a box on it, open to the (black) sky, lit by a directional light shining
+/// along `direction`.
+pub fn yard(direction: Vec3) -> (SceneBuilder, Camera) {
+    let mut b = SceneBuilder::new();
+    let white = b.add_material(MaterialDesc::lambertian("white", WHITE));
+    let floor = quad(
+        [
+            [-2.0, 0.0, -2.0],
+            [2.0, 0.0, -2.0],
+            [2.0, 0.0, 2.0],
+            [-2.0, 0.0, 2.0],
+        ],
+        [0.0, 1.0, 0.0],
+        Some(white),
+    );
+    let mesh = b.add_mesh("floor", vec![floor]);
+    b.add_node(NodeDesc::new("floor").mesh(mesh));
+    let cube = b.add_mesh("box", vec![unit_cube(Some(white))]);
+    b.add_node(
+        NodeDesc::new("box")
+            .mesh(cube)
+            .translation([0.0, 0.5, 0.0])
+            .rotation([0.0, 0.25881905, 0.0, 0.965_925_8]),
+    );
+    add_sun(&mut b, direction, 3.0);
+    let camera = look_at(
+        Vec3::new(2.5, 2.5, 3.5),
+        Vec3::new(0.0, 0.3, 0.0),
+        50.0,
+        0.05,
+    );
+    (b, camera)
+}
+
+/// A directional light of `irradiance` W/m^2 shining along `direction`.
+pub fn add_sun(b: &mut SceneBuilder, direction: Vec3, irradiance: f32) {
+    let l = b.add_light(LightDesc::new(
+        "sun",
+        LightType::Directional,
+        [1.0; 3],
+        irradiance,
+    ));
+    // The node's -Z axis is the direction the light shines along.
+    let q = glam::Quat::from_rotation_arc(Vec3::NEG_Z, direction.normalize());
+    b.add_node(NodeDesc::new("sun").light(l).rotation(q.to_array()));
+}
+
+/// A closed box of albedo `albedo` whose every face emits radiance `le` (the furnace).
+pub fn furnace(albedo: f32, le: f32) -> (SceneBuilder, Camera) {
+    let mut b = SceneBuilder::new();
+    let m = b.add_material(MaterialDesc::lambertian("furnace", [albedo; 3]).emissive([1.0; 3], le));
+    let walls = inward_box([-1.0, 0.0, -1.0], [1.0, 2.0, 1.0], m);
+    let mesh = b.add_mesh("furnace", vec![walls]);
+    b.add_node(NodeDesc::new("furnace").mesh(mesh));
+    let camera = look_at(
+        Vec3::new(0.0, 1.0, 0.5),
+        Vec3::new(0.0, 0.8, -1.0),
+        70.0,
+        0.01,
+    );
+    (b, camera)
+}
+
+/// `b` placed under one root node that scales by `scale` and then translates by `offset`;
+/// point and spot intensities scaled by `scale`^2 so that every image stays the same.
+pub fn transformed(b: &SceneBuilder, scale: f32, offset: Vec3) -> SceneBuilder {
+    let mut out = b.clone();
+    out.scale_punctual_intensities(scale * scale);
+    out.wrap_roots(
+        NodeDesc::new("root")
+            .translation(offset.to_array())
+            .scale([scale; 3]),
+    );
+    out
+}
+
+/// A camera moved by the same transform as [`transformed`].
+pub fn transform_camera(c: &Camera, scale: f32, offset: Vec3) -> Camera {
+    let m = Mat4::from_translation(offset) * Mat4::from_scale(Vec3::splat(scale));
+    let eye = m.transform_point3(c.eye());
+    let (_, rot, _) = c.world.to_scale_rotation_translation();
+    Camera {
+        world: Mat4::from_rotation_translation(rot, eye),
+        znear: c.znear * scale,
+        zfar: c.zfar * scale,
+        ..c.clone()
+    }
+}
