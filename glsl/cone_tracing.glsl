@@ -26,6 +26,18 @@ vec4 sample_directional(vec3 uvw, vec3 dir, float level) {
     return w.x * sx + w.y * sy + w.z * sz;
 }
 
+#ifndef PAPER
+// The level a cone of world diameter `diameter` samples: 0 is the full-resolution volume, L >= 1
+// level L - 1 of the directional volumes (texels of 2^L voxels). Level 0 of the directional
+// volumes has texels of two voxels. A trilinear sample reaches a texel beyond its own, so at the
+// cone's matched level it would always touch the surface the cone leaves: sample
+// frame.tuning.x levels finer.
+float cone_level(float diameter) {
+    float vs = voxel_size();
+    return max(log2(max(diameter, vs) / vs) - frame.tuning.x, 0.0);
+}
+#endif
+
 // What a cone of world diameter `diameter` sees at grid coordinates `uvw`.
 vec4 sample_cone(vec3 uvw, vec3 dir, float diameter) {
     float vs = voxel_size();
@@ -37,10 +49,7 @@ vec4 sample_cone(vec3 uvw, vec3 dir, float diameter) {
     if (lod < 1.0) s = mix(textureLod(radiance_tex, uvw, 0.0), s, clamp(lod, 0.0, 1.0));
 #endif
 #else
-    // Level 0 of the directional volumes has texels of two voxels. A trilinear sample reaches a
-    // texel beyond its own, so at the cone's matched level it would always touch the surface the
-    // cone leaves: sample frame.tuning.x levels finer.
-    float level = max(log2(max(diameter, vs) / vs) - frame.tuning.x, 0.0);
+    float level = cone_level(diameter);
     vec4 s = sample_directional(uvw, dir, max(level - 1.0, 0.0));
 #if CONE_FULL_RES
     if (level < 1.0) s = mix(textureLod(radiance_tex, uvw, 0.0), s, level);
@@ -70,10 +79,22 @@ Cone trace_cone(vec3 origin, vec3 dir, float tan_half, float t0, float max_dist)
         float diameter = max(2.0 * tan_half * t, vs);
 #endif
         vec4 s = sample_cone(uvw, dir, diameter);
+        float step_len = max(diameter * frame.cone.y, 0.1 * vs);
+#ifndef PAPER
+        // Opacity correction for the step length: a sample's opacity is that of one texel of
+        // the level it is read from, and a step crosses step / texel of them. Without it a step
+        // shorter than the texel counts the same voxels twice (a bright voxel beside the cone's
+        // start most of all) and a longer one skips occlusion.
+        float texel = vs * exp2(CONE_FULL_RES != 0 ? cone_level(diameter)
+                                                   : max(cone_level(diameter), 1.0));
+        float a = clamp(s.a, 0.0, 1.0);
+        float a_step = 1.0 - pow(1.0 - a, step_len / texel);
+        s = a > 0.0 ? s * (a_step / a) : vec4(0.0);
+#endif
         cone.radiance += (1.0 - cone.opacity) * s.rgb;
         cone.opacity += (1.0 - cone.opacity) * s.a;
         cone.occlusion += (1.0 - cone.occlusion) * s.a / (1.0 + frame.trace.y * diameter);
-        t += max(diameter * frame.cone.y, 0.1 * vs);
+        t += step_len;
     }
     return cone;
 }

@@ -12,7 +12,14 @@
 #define CONE_FULL_RES 0
 #include "cone_tracing.glsl"
 
-layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
+// One invocation per filled voxel, from the list voxel_list.comp made.
+layout(local_size_x = 64) in;
+
+layout(set = 1, binding = 6, std430) readonly buffer VoxelList {
+    uint dispatch_x, dispatch_y, dispatch_z;
+    uint count;
+    uint coords[];
+};
 
 #ifdef PAPER
 layout(set = 1, binding = 5, rgba8) uniform image3D radiance;
@@ -47,8 +54,10 @@ vec3 gather(vec3 p, vec3 n) {
 }
 
 void main() {
-    ivec3 c = ivec3(gl_GlobalInvocationID);
-    if (!in_grid(c)) return;
+    uint i = gl_GlobalInvocationID.x;
+    if (i >= min(count, uint(coords.length()))) return;
+    uint packed = coords[i];
+    ivec3 c = ivec3(packed & 1023u, (packed >> 10) & 1023u, packed >> 20);
     Voxel v = load_voxel(c);
     if (!v.filled) return;
     vec4 direct = imageLoad(radiance, c);

@@ -34,8 +34,7 @@ USAGE:
                voxels-emission, voxels-radiance: the first voxel along each ray
   --mip L      with voxels-radiance: the directional volumes at mip level L
   --voxels N   voxels per side of the grid (default 64)
-  --bounces B  1: direct light in the voxels; 2: plus a second bounce; auto (default): 2 when
-               the scene has emissive surfaces, else 1
+  --bounces B  1 (default): direct light in the voxels; 2: plus a second bounce
   --paper      the original's behaviour and constants (RGBA8 averages and volumes, 6 cones)
   --cones N, --aperture DEG, --step F   diffuse cones per pixel (6), their aperture (60),
                step as a fraction of the cone diameter (0.5)
@@ -255,12 +254,9 @@ fn gi_settings(args: &Args) -> Result<GiSettings> {
             ..Default::default()
         }
     };
-    gi.bounces = match args.value("--bounces") {
-        Some("auto") => 0,
-        _ => args.number("--bounces", gi.bounces)?,
-    };
-    if gi.bounces > 2 {
-        bail!("--bounces must be 1, 2 or auto");
+    gi.bounces = args.number("--bounces", gi.bounces)?;
+    if !(1..=2).contains(&gi.bounces) {
+        bail!("--bounces must be 1 or 2");
     }
     gi.cone_count = args.number("--cones", gi.cone_count)?;
     if !(1..=16).contains(&gi.cone_count) {

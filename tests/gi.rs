@@ -174,7 +174,11 @@ fn cornell_box_white_wall_is_redder_next_to_the_red_wall() {
         .join("../shared/scenes/CornellBox-Original/CornellBox-Original.gltf");
     let s = voxgi::scene::load(&path).unwrap();
     let size = 64;
-    let img = render(&s, settings(Mode::Indirect, 64, size));
+    // The ceiling panel's light reaches the red wall by cones only; its colour reaches the back
+    // wall by the second bounce.
+    let mut set = settings(Mode::Indirect, 64, size);
+    set.gi.bounces = 2;
+    let img = render(&s, set);
     // The back wall above the boxes: columns near the red (left) and green (right) walls.
     let ratio = |x0: f32, x1: f32| {
         let (mut r, mut g) = (0.0, 0.0);

@@ -463,8 +463,7 @@ pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
         rows.push(Row {
             index: k + 1,
             label: setting.label.clone(),
-            // What ran: `bounces` auto decided for this scene.
-            gi: setting.gi.resolved(scene.has_emission()),
+            gi: setting.gi.clone(),
             passes,
             frame,
             metrics: m,

@@ -175,7 +175,7 @@ const AXES: &[(&str, f64, f64, bool, Apply)] = &[
     // (name, min, max, integer, apply); voxels and paper are read first (they pick the base).
     ("voxels", 4.0, 1024.0, true, |g, v| g.voxels = v as u32),
     ("paper", 0.0, 1.0, true, |g, v| g.paper = v != 0.0),
-    ("bounces", 0.0, 2.0, true, |g, v| g.bounces = v as u32), // 0: auto
+    ("bounces", 1.0, 2.0, true, |g, v| g.bounces = v as u32),
     ("cones", 1.0, 16.0, true, |g, v| g.cone_count = v as u32),
     ("aperture", 0.5, 179.0, false, |g, v| {
         g.cone_aperture_deg = v as f32
@@ -294,16 +294,14 @@ mod tests {
         assert_eq!(tiny[1].label, "32^3 paper");
         assert!(tiny.iter().all(|s| s.gi.voxels == 32));
         let d = parse("default").unwrap();
-        // 4 resolutions x (default, paper), then each axis without the default it repeats
-        // (bounces: the default is auto, so 1 and 2 both stay).
-        assert_eq!(d.len(), 8 + 4 + 4 + 2 + 2);
+        // 4 resolutions x (default, paper), then each axis without the default it repeats.
+        assert_eq!(d.len(), 8 + 4 + 4 + 2 + 1);
         let labels: Vec<&str> = d.iter().map(|s| s.label.as_str()).collect();
         for l in [
             "256^3 paper",
             "64^3 cones=1",
             "64^3 aperture=30",
             "64^3 step=0.25",
-            "64^3 bounces=1",
             "64^3 bounces=2",
         ] {
             assert!(labels.contains(&l), "{l} missing from {labels:?}");

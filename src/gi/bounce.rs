@@ -4,13 +4,24 @@
 use super::inject::{read_voxel_data, voxel_data_descs};
 use super::volumes::Volumes;
 use crate::render::pipelines::{self, Desc, DescriptorPool, Pipeline, Set, SetLayout, Spec};
-use crate::vk::{vk, Access, Context, Graph, VkResult};
+use crate::vk::{vk, Access, Buffer, Context, Graph, VkResult};
+use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
 pub struct Bounce {
+    list_pipeline: Pipeline,
     pipeline: Pipeline,
     set: Set,
     cone_set: Set,
+    /// The filled voxels (voxel_list.comp), after the bounce's dispatch arguments and count.
+    list: Buffer,
+}
+
+/// Room in the voxel list: every voxel of a small grid; surfaces (about N^2 per side of the
+/// grid they cross) beyond that, so that 512^3 stays within a 128 MiB storage buffer.
+fn list_capacity(n: u32) -> u64 {
+    let n = n as u64;
+    (n * n * n).min(64 * n * n)
 }
 
 /// The directional volumes as cones sample them (bindings 1 to 6), with the full-resolution
@@ -35,26 +46,48 @@ impl Bounce {
         scene_layout: &SetLayout,
         paper: bool,
     ) -> VkResult<Bounce> {
+        let list = Buffer::new(
+            ctx,
+            "voxel list",
+            16 + 4 * list_capacity(volumes.grid.resolution),
+            vk::BufferUsageFlags::STORAGE_BUFFER
+                | vk::BufferUsageFlags::INDIRECT_BUFFER
+                | vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )?;
         let mut descs = voxel_data_descs(volumes);
         descs.push((5, Desc::StorageImage(volumes.radiance.view)));
+        descs.push((6, Desc::Storage(&list)));
         let set = pool.set(vk::ShaderStageFlags::COMPUTE, &descs)?;
         let cone_set = cone_set(pool, volumes, false)?;
-        let shader = if paper {
-            "inject_bounce.comp:PAPER"
-        } else {
-            "inject_bounce.comp"
+        let variant = |name: &str| {
+            if paper {
+                format!("{name}:PAPER")
+            } else {
+                name.to_string()
+            }
         };
+        let list_pipeline = pipelines::compute(
+            ctx,
+            &variant("voxel_list.comp"),
+            &[scene_layout, &set.layout],
+            0,
+            &Spec(vec![]),
+        )?;
+        let shader = variant("inject_bounce.comp");
         let pipeline = pipelines::compute(
             ctx,
-            shader,
+            &shader,
             &[scene_layout, &set.layout, &cone_set.layout],
             0,
             &Spec(vec![]),
         )?;
         Ok(Bounce {
+            list_pipeline,
             pipeline,
             set,
             cone_set,
+            list,
         })
     }
 
@@ -67,8 +100,33 @@ impl Bounce {
     ) {
         let d = &ctx.device;
         let n = volumes.grid.resolution;
+        g.pass("voxel list clear")
+            .buffer(&self.list, Access::TransferWrite)
+            .untimed()
+            .record(|cmd| unsafe {
+                // Dispatch (0, 1, 1), count 0.
+                let head: [u8; 16] = words_le([0, 1, 1, 0]);
+                d.cmd_update_buffer(cmd, self.list.raw, 0, &head);
+            });
+        read_voxel_data(g.pass("voxel list"), volumes)
+            .buffer(&self.list, Access::ComputeStorageReadWrite)
+            .record(|cmd| unsafe {
+                let p = &self.list_pipeline;
+                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, p.raw);
+                d.cmd_bind_descriptor_sets(
+                    cmd,
+                    vk::PipelineBindPoint::COMPUTE,
+                    p.layout,
+                    0,
+                    &[scene_set, self.set.raw],
+                    &[],
+                );
+                let groups = n.div_ceil(4);
+                d.cmd_dispatch(cmd, groups, groups, groups);
+            });
         let mut pass = read_voxel_data(g.pass("bounce"), volumes)
-            .image(&volumes.radiance, Access::ComputeStorageReadWrite);
+            .image(&volumes.radiance, Access::ComputeStorageReadWrite)
+            .buffer(&self.list, Access::ComputeIndirectRead);
         for f in &volumes.faces {
             pass = pass.image(f, Access::ComputeSampled);
         }
@@ -83,8 +141,16 @@ impl Bounce {
                 &[scene_set, self.set.raw, self.cone_set.raw],
                 &[],
             );
-            let groups = n.div_ceil(4);
-            d.cmd_dispatch(cmd, groups, groups, groups);
+            d.cmd_dispatch_indirect(cmd, self.list.raw, 0);
         });
     }
+}
+
+/// Little-endian bytes of four words.
+fn words_le(w: [u32; 4]) -> [u8; 16] {
+    let mut b = [0u8; 16];
+    for (i, v) in w.iter().enumerate() {
+        b[4 * i..4 * i + 4].copy_from_slice(&v.to_le_bytes());
+    }
+    b
 }

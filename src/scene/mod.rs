@@ -120,13 +120,6 @@ impl Default for Material {
     }
 }
 
-impl Scene {
-    /// Whether any material emits light.
-    pub fn has_emission(&self) -> bool {
-        self.materials.iter().any(Material::is_emissive)
-    }
-}
-
 impl Material {
     pub fn is_emissive(&self) -> bool {
         self.emissive.max_element() > 0.0

@@ -25,6 +25,9 @@ pub enum Access {
     ComputeStorageRead,
     ComputeStorageWrite,
     ComputeStorageReadWrite,
+    /// The arguments of an indirect dispatch, and storage reads of the same buffer by the
+    /// dispatched shader.
+    ComputeIndirectRead,
     /// Storage image or buffer atomics from the fragment stage (voxelization).
     FragmentStorageReadWrite,
 }
@@ -108,6 +111,12 @@ impl Access {
                 A::SHADER_STORAGE_READ | A::SHADER_STORAGE_WRITE,
                 L::GENERAL,
                 true,
+            ),
+            Access::ComputeIndirectRead => (
+                S::DRAW_INDIRECT | S::COMPUTE_SHADER,
+                A::INDIRECT_COMMAND_READ | A::SHADER_STORAGE_READ,
+                L::UNDEFINED,
+                false,
             ),
             Access::FragmentStorageReadWrite => (
                 S::FRAGMENT_SHADER,
