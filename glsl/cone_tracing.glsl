@@ -96,6 +96,7 @@ Cone trace_cone(vec3 origin, vec3 dir, float tan_half, float t0, float max_dist)
         cone.occlusion += (1.0 - cone.occlusion) * s.a / (1.0 + frame.trace.y * diameter);
         t += step_len;
     }
+    cone.radiance /= frame.tuning.y;  // the volumes' radiance scale
     return cone;
 }
 

@@ -73,5 +73,5 @@ void main() {
     vec3 e = v.agreement < 0.5 ? 0.5 * (gather(p, n) + gather(p, -n)) : gather(p, n);
     vec3 bounce = v.albedo / PI * e;
 #endif
-    imageStore(radiance, c, vec4(direct.rgb + bounce, direct.a));
+    imageStore(radiance, c, vec4(direct.rgb + bounce * frame.tuning.y, direct.a));
 }

@@ -92,5 +92,5 @@ void main() {
 #else
     vec3 outgoing = v.albedo / PI * irradiance + v.emission;
 #endif
-    imageStore(radiance, c, vec4(outgoing, 1.0));
+    imageStore(radiance, c, vec4(outgoing * frame.tuning.y, 1.0));
 }

@@ -78,10 +78,14 @@ Voxel load_voxel(ivec3 c) {
     if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u && v.filled) {
         uint j = voxel_index(c) * EMISSION_STRIDE;
         uvec3 e = uvec3(static_emission[j], static_emission[j + 1u], static_emission[j + 2u]);
+        uint cov = static_emission[j + 3u];
         if (dynamic) {
             e += uvec3(dynamic_emission[j], dynamic_emission[j + 1u], dynamic_emission[j + 2u]);
+            cov += dynamic_emission[j + 3u];
         }
-        v.emission = vec3(e) / (float(count) * frame.cone.w);
+        // Sum of coverage-weighted emission over the coverage, or over 1 when the surfaces
+        // cover less than the voxel (voxelize.frag).
+        v.emission = vec3(e) / (max(float(cov) / FIXED_ONE, 1.0) * frame.cone.w);
     }
     return v;
 }

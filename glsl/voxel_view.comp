@@ -50,10 +50,10 @@ void main() {
             if (pass.mode == 4u) {
                 vec3 uvw = (vec3(c) + 0.5) / float(res);
                 vec4 s = sample_directional(uvw, dir, float(level));
-                if (s.a > 0.0) { result = vec4(s.rgb, 1.0); break; }
+                if (s.a > 0.0) { result = vec4(s.rgb / frame.tuning.y, 1.0); break; }
             } else if (pass.mode == 3u) {
                 vec4 s = texelFetch(radiance_tex, c, 0);
-                if (s.a > 0.0) { result = vec4(s.rgb, 1.0); break; }
+                if (s.a > 0.0) { result = vec4(s.rgb / frame.tuning.y, 1.0); break; }
             } else {
                 Voxel v = load_voxel(c);
                 if (v.filled) {

@@ -23,6 +23,9 @@ layout(location = 3) flat in vec4 g_plane;
 layout(location = 4) flat in vec2 g_depth;
 #endif
 layout(location = 5) flat in int g_axis;
+#ifndef PAPER
+layout(location = 6) flat in float g_coverage;
+#endif
 
 #ifdef PAPER
 #include "atomic_average.glsl"
@@ -82,7 +85,10 @@ void main() {
     uvec3 a = uvec3(round(clamp(base.rgb, 0.0, 1.0) * FIXED_ONE));
     ivec3 nq = ivec3(round(normal * FIXED_ONE));
     uvec3 n2 = uvec3(round(normal * normal * FIXED_ONE));
-    uvec3 e = uvec3(round(max(emission, vec3(0.0)) * frame.cone.w));
+    // Emission weighted by coverage, and the coverage summed beside it: a voxel's emission is
+    // the coverage-weighted mean of its surfaces', diluted where they cover less than the voxel.
+    uvec3 e = uvec3(round(max(emission, vec3(0.0)) * g_coverage * frame.cone.w));
+    uint cov = uint(round(g_coverage * FIXED_ONE));
     for (int z = z0; z <= z1 && z <= z0 + 2; z++) {
         ivec3 c = unswizzle(ivec3(ivec2(px), z));
         if (!in_grid(c)) continue;
@@ -102,6 +108,7 @@ void main() {
             atomicAdd(emission_accum[j], e.r);
             atomicAdd(emission_accum[j + 1u], e.g);
             atomicAdd(emission_accum[j + 2u], e.b);
+            atomicAdd(emission_accum[j + 3u], cov);
         }
     }
 #endif

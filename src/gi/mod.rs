@@ -95,6 +95,30 @@ impl GiSettings {
     }
 }
 
+/// What the RGBA16F radiance volumes are scaled by: 1, unless the brightest voxel could come
+/// near the half float's largest value (65504), e.g. a 1e6 W/sr light. The bound: a white voxel
+/// one voxel from a point or spot light, lit head-on by a directional one, or the strongest
+/// emitter; kept under 1e4 to leave room for the second bounce and the mips' sums.
+pub fn radiance_scale(scene: &crate::scene::Scene, voxel_size: f32, max_emission: f32) -> f32 {
+    use crate::scene::LightKind;
+    let brightest = scene
+        .lights
+        .iter()
+        .map(|l| {
+            let i = l.radiance.max_element();
+            match l.kind {
+                LightKind::Directional => i,
+                _ => i / (voxel_size * voxel_size),
+            }
+        })
+        .fold(max_emission, f32::max);
+    if brightest.is_finite() && brightest > 1e4 {
+        1e4 / brightest
+    } else {
+        1.0
+    }
+}
+
 /// The voxel grid: a cube over the scene bounds, N voxels per side.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VoxelGrid {
@@ -203,6 +227,8 @@ pub struct Gi {
     pub dynamic: bool,
     /// Scale of the emission sums (fixed point per unit radiance).
     pub emission_scale: f32,
+    /// The radiance volumes hold radiance x this (see [`radiance_scale`]).
+    pub radiance_scale: f32,
     /// Static geometry must be voxelized (first frame, or a static node moved).
     pub static_dirty: bool,
     _pool: DescriptorPool,
@@ -307,6 +333,11 @@ impl Gi {
             emissive,
             dynamic,
             emission_scale: 4096.0 / max_emission.max(1e-6),
+            radiance_scale: if paper {
+                1.0
+            } else {
+                radiance_scale(scene, grid.voxel_size(), max_emission)
+            },
             static_dirty: true,
             _pool: pool,
         })

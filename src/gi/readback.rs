@@ -225,14 +225,15 @@ impl Gi {
                 dump.normal[v] =
                     Vec3::new(w[4] as i32 as f32, w[5] as i32 as f32, w[6] as i32 as f32) * inv;
                 if let Some(se) = &se {
-                    let mut e = [se[v * es], se[v * es + 1], se[v * es + 2]];
+                    let mut e = [se[v * es], se[v * es + 1], se[v * es + 2], se[v * es + 3]];
                     if let Some(de) = &de {
-                        for k in 0..3 {
+                        for k in 0..4 {
                             e[k] = e[k].wrapping_add(de[v * es + k]);
                         }
                     }
+                    let coverage = (e[3] as f32 / 4096.0).max(1.0);
                     dump.emission[v] = Vec3::new(e[0] as f32, e[1] as f32, e[2] as f32)
-                        / (count as f32 * self.emission_scale);
+                        / (coverage * self.emission_scale);
                 }
             }
         }
@@ -264,7 +265,14 @@ impl Gi {
                     })
                     .collect()
             };
-            dump.radiance = Some(texels);
+            // Back to radiance: the volume holds it times the radiance scale.
+            let k = self.radiance_scale;
+            dump.radiance = Some(
+                texels
+                    .into_iter()
+                    .map(|t| (t.truncate() / k).extend(t.w))
+                    .collect(),
+            );
         }
         Ok(dump)
     }

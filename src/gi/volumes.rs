@@ -1,13 +1,14 @@
 //! The GPU memory of the voxel passes: only what the scene and the settings need.
 
 use super::{GiSettings, VoxelGrid};
-use crate::vk::{vk, Buffer, Context, Image, ImageDesc, Sampler, VkResult};
+use crate::vk::{vk, Buffer, Context, Image, ImageDesc, Sampler, VkError, VkResult};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
 /// uints per voxel of the default accumulators (glsl/voxel_common.glsl).
 pub const ACCUM_STRIDE: u64 = 10;
-pub const EMISSION_STRIDE: u64 = 3;
+/// Emission sums: RGB weighted by coverage, then the coverage (fixed point, voxelize.frag).
+pub const EMISSION_STRIDE: u64 = 4;
 
 /// What voxelization writes, per mode.
 pub enum VoxelData {
@@ -113,7 +114,23 @@ impl Volumes {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
+        let limit = ctx.properties.limits.max_storage_buffer_range as u64;
         let mut buffer = |name: &str, stride: u64| -> VkResult<Buffer> {
+            // Checked before allocating: a larger buffer allocates, then fails validation (or
+            // reads garbage) when bound.
+            if voxels * stride * 4 > limit {
+                let largest = (1..=n)
+                    .rev()
+                    .find(|&k| (k as u64).pow(3) * stride * 4 <= limit)
+                    .unwrap_or(1);
+                return Err(VkError::GridTooLarge {
+                    grid: n,
+                    what: name.into(),
+                    bytes: voxels * stride * 4,
+                    limit,
+                    largest,
+                });
+            }
             info.push(VolumeInfo {
                 name: name.into(),
                 bytes: voxels * stride * 4,

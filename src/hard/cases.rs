@@ -484,7 +484,7 @@ fn transformed_room(env: &mut Env, gi: &GiSettings, scale: f32, offset: Vec3) ->
     let base = env.render(&s, &cam, gi)?;
     let t = transformed(&b, scale, offset);
     let s = env.load("room-transformed", &t)?;
-    let img = env.render(&s, &transform_camera(&cam, scale, offset), gi)?;
+    let img = env.render(&s, &transform_camera(&cam, scale, offset, s.origin), gi)?;
     Ok(rel_mse(&img, &base))
 }
 

@@ -292,10 +292,10 @@ pub fn transformed(b: &SceneBuilder, scale: f32, offset: Vec3) -> SceneBuilder {
     out
 }
 
-/// A camera moved by the same transform as [`transformed`].
-pub fn transform_camera(c: &Camera, scale: f32, offset: Vec3) -> Camera {
-    let m = Mat4::from_translation(offset) * Mat4::from_scale(Vec3::splat(scale));
-    let eye = m.transform_point3(c.eye());
+/// A camera moved by the same transform as [`transformed`], into the loaded scene's
+/// coordinates (relative to its `origin`, in f64 as the loader places the scene).
+pub fn transform_camera(c: &Camera, scale: f32, offset: Vec3, origin: glam::DVec3) -> Camera {
+    let eye = (c.eye().as_dvec3() * scale as f64 + offset.as_dvec3() - origin).as_vec3();
     let (_, rot, _) = c.world.to_scale_rotation_translation();
     Camera {
         world: Mat4::from_rotation_translation(rot, eye),

@@ -168,7 +168,7 @@ pub struct Renderer {
     gpu: GpuScene,
     states: ResourceStates,
     pub timer: Option<PassTimer>,
-    command_pool: vk::CommandPool,
+    _command_pool: CommandPool,
     cmd: vk::CommandBuffer,
     /// Test hook: record this pass without its barriers.
     pub omit_barriers_of: Option<String>,
@@ -492,17 +492,19 @@ impl Renderer {
         let pool_info = vk::CommandPoolCreateInfo::default()
             .queue_family_index(ctx.queue_family)
             .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
-        let command_pool =
-            unsafe { ctx.device.create_command_pool(&pool_info, None) }.map_err(|result| {
+        let command_pool = CommandPool {
+            raw: unsafe { ctx.device.create_command_pool(&pool_info, None) }.map_err(|result| {
                 VkError::Call {
                     call: "vkCreateCommandPool",
                     result,
                 }
-            })?;
+            })?,
+            ctx: ctx.clone(),
+        };
         let cmd = unsafe {
             ctx.device.allocate_command_buffers(
                 &vk::CommandBufferAllocateInfo::default()
-                    .command_pool(command_pool)
+                    .command_pool(command_pool.raw)
                     .command_buffer_count(1),
             )
         }
@@ -584,7 +586,7 @@ impl Renderer {
             gpu,
             states,
             timer,
-            command_pool,
+            _command_pool: command_pool,
             cmd,
             omit_barriers_of: None,
             ctx: ctx.clone(),
@@ -637,7 +639,7 @@ impl Renderer {
                 if self.specular_needed { 1.0 } else { 0.0 },
                 self.settings.mip.unwrap_or(0) as f32,
             );
-            u.tuning = Vec4::new(s.lod_offset, 0.0, 0.0, 0.0);
+            u.tuning = Vec4::new(s.lod_offset, gi.radiance_scale, 0.0, 0.0);
             for (dst, c) in u.cones.iter_mut().zip(&gi.cones) {
                 *dst = *c;
             }
@@ -1019,11 +1021,21 @@ impl Renderer {
 
 impl Drop for Renderer {
     fn drop(&mut self) {
+        // The fields free themselves after this, once the device has finished with them.
         unsafe {
             let _ = self.ctx.device.device_wait_idle();
-            self.ctx
-                .device
-                .destroy_command_pool(self.command_pool, None);
         }
+    }
+}
+
+/// The renderer's command pool, freed on drop (also when `Renderer::new` fails half way).
+struct CommandPool {
+    raw: vk::CommandPool,
+    ctx: Arc<Context>,
+}
+
+impl Drop for CommandPool {
+    fn drop(&mut self) {
+        unsafe { self.ctx.device.destroy_command_pool(self.raw, None) };
     }
 }

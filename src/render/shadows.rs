@@ -20,15 +20,26 @@ fn any_up(dir: Vec3) -> Vec3 {
     }
 }
 
+/// Half the diagonal of the bounds; 1 for a point or empty scene (no scale to follow).
+fn scene_radius(bounds: &Aabb) -> f32 {
+    let r = bounds.extent().length() * 0.5;
+    if r.is_finite() && r > 0.0 {
+        r
+    } else {
+        1.0
+    }
+}
+
 /// Depth range of a perspective light view: from a small fraction of the scene to its far side.
 fn near_far(eye: Vec3, bounds: &Aabb) -> (f32, f32) {
-    let radius = (bounds.extent().length() * 0.5).max(1e-3);
+    let radius = scene_radius(bounds);
     let far_corner = bounds
         .corners()
         .iter()
         .map(|c| (*c - eye).length())
         .fold(0.0f32, f32::max);
-    let near = (radius * 2e-3).max(1e-4);
+    // Relative to the scene only: an absolute floor would change shadows with the units.
+    let near = radius * 2e-3;
     (near, (far_corner * 1.01).max(near * 10.0))
 }
 
@@ -54,7 +65,7 @@ pub fn light_views(
     let (center, radius) = if bounds.is_empty() {
         (Vec3::ZERO, 1.0)
     } else {
-        (bounds.center(), (bounds.extent().length() * 0.5).max(1e-3))
+        (bounds.center(), scene_radius(bounds))
     };
     for l in lights {
         let views = match l.kind {

@@ -10,7 +10,7 @@ use super::geometry::{self, RawPrimitive, Topology};
 use super::material::load_materials;
 use super::{Aabb, Camera, Instance, Light, LightKind, Material, Primitive, Scene, SceneError};
 use super::{Vertex, DEFAULT_YFOV_DEGREES};
-use glam::{Mat4, Quat, Vec2, Vec3, Vec4};
+use glam::{DMat4, DVec3, Mat4, Quat, Vec2, Vec3, Vec4};
 use gltf::json;
 use json::accessor::{ComponentType, Type};
 use json::mesh::{Mode, Semantic};
@@ -79,7 +79,9 @@ fn load_inner(path: &Path) -> Result<Scene, String> {
         camera_node: None,
         morph_warned: false,
         skin_warned: false,
+        origin: DVec3::ZERO,
     };
+    loader.origin = loader.find_origin();
     loader.walk()?;
 
     let Loader {
@@ -91,6 +93,7 @@ fn load_inner(path: &Path) -> Result<Scene, String> {
         default_material_used,
         camera_node,
         mut warnings,
+        origin,
         ..
     } = loader;
 
@@ -121,6 +124,7 @@ fn load_inner(path: &Path) -> Result<Scene, String> {
         lights,
         camera,
         bounds,
+        origin,
         warnings,
     })
 }
@@ -457,6 +461,8 @@ struct Loader<'a> {
     camera_node: Option<(usize, Mat4)>,
     morph_warned: bool,
     skin_warned: bool,
+    /// See `Scene::origin`.
+    origin: DVec3,
 }
 
 fn mesh_label(index: usize, mesh: &json::Mesh) -> String {
@@ -536,14 +542,56 @@ impl Loader<'_> {
         }
     }
 
+    /// Where the scene's meshes lie, in f64: the centre of their nodes' world positions, in
+    /// steps of 1024 m. The scene is placed relative to it, so that a model 1e5 m from the file's origin keeps the
+    /// precision it has at the origin (f32 world matrices would round it to 8 mm).
+    fn find_origin(&mut self) -> DVec3 {
+        let root = self.root;
+        let mut stack: Vec<(usize, DMat4)> = self
+            .root_nodes()
+            .into_iter()
+            .map(|n| (n, DMat4::IDENTITY))
+            .collect();
+        let mut visited = vec![false; root.nodes.len()];
+        let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+        while let Some((n, parent)) = stack.pop() {
+            let Some(node) = root.nodes.get(n) else {
+                continue;
+            };
+            if std::mem::replace(&mut visited[n], true) {
+                continue;
+            }
+            let Some(local) = local_transform(node) else {
+                continue;
+            };
+            let world = parent * local.as_dmat4();
+            if node.mesh.is_some() {
+                let t = world.w_axis.truncate();
+                lo = lo.min(t);
+                hi = hi.max(t);
+            }
+            stack.extend(node.children.iter().flatten().map(|c| (c.value(), world)));
+        }
+        // In whole steps of 1024 m (exact in f32): a scene within 512 m of its file's origin
+        // keeps its coordinates, and one further away ends up within 512 m of the new one,
+        // where f32 resolves 30 um.
+        let centre = ((lo + hi) * 0.5 / 1024.0).round() * 1024.0;
+        if centre.is_finite() {
+            centre
+        } else {
+            DVec3::ZERO
+        }
+    }
+
     /// Depth-first, pre-order walk of the chosen scene (children in file order).
     fn walk(&mut self) -> Result<(), String> {
         let root = self.root;
-        let mut stack: Vec<(usize, Mat4)> = self
+        let to_local = DMat4::from_translation(-self.origin);
+        let mut stack: Vec<(usize, DMat4)> = self
             .root_nodes()
             .into_iter()
             .rev()
-            .map(|n| (n, Mat4::IDENTITY))
+            .map(|n| (n, to_local))
             .collect();
         let mut visited = vec![false; root.nodes.len()];
         while let Some((n, parent)) = stack.pop() {
@@ -561,9 +609,11 @@ impl Loader<'_> {
                 ));
                 continue;
             }
-            let Some(world) = local_transform(node)
-                .map(|l| parent * l)
-                .filter(|w| w.is_finite())
+            // In f64 down the hierarchy, rounded to f32 once, relative to the origin.
+            let Some((world64, world)) = local_transform(node)
+                .map(|l| parent * l.as_dmat4())
+                .map(|w| (w, w.as_mat4()))
+                .filter(|(_, w)| w.is_finite())
             else {
                 self.warn(format!(
                     "{label} has a non-finite transform; it and its children are ignored"
@@ -592,7 +642,7 @@ impl Loader<'_> {
                 self.place_light(l.light.value(), &label, world);
             }
             for c in node.children.iter().flatten().rev() {
-                stack.push((c.value(), world));
+                stack.push((c.value(), world64));
             }
         }
         Ok(())

@@ -264,6 +264,11 @@ pub struct Scene {
     pub camera: Camera,
     /// World bounds of all instances (EMPTY for an empty scene).
     pub bounds: Aabb,
+    /// The file's coordinates of this scene's (0, 0, 0), the centre of the meshes' nodes in whole
+    /// steps of 1024 m (zero for a scene near its file's origin): instances,
+    /// lights, cameras and bounds are relative to it (precision far from the file's origin);
+    /// add it for the file's coordinates.
+    pub origin: glam::DVec3,
     pub warnings: Vec<String>,
 }
 

@@ -35,6 +35,19 @@ pub enum VkError {
     },
     #[error("shader {0} is not among the compiled shaders")]
     NoShader(String),
+    #[error(
+        "a {grid}^3 grid needs {} MiB for {what}, more than this device binds in one storage \
+         buffer (maxStorageBufferRange: {} MiB); use --voxels {largest} or less",
+        bytes >> 20,
+        limit >> 20
+    )]
+    GridTooLarge {
+        grid: u32,
+        what: String,
+        bytes: u64,
+        limit: u64,
+        largest: u32,
+    },
 }
 
 pub type VkResult<T> = Result<T, VkError>;

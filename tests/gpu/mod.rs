@@ -37,6 +37,7 @@ pub fn empty_scene() -> Scene {
             is_default: false,
         },
         bounds: Aabb::EMPTY,
+        origin: glam::DVec3::ZERO,
         warnings: vec![],
     }
 }

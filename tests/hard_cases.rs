@@ -1,0 +1,142 @@
+//! The hard cases of `voxgi::hard` (docs/hard-cases.md), one test each, at the default settings
+//! on a small image and grid under the validation layer. Every case must stay finite (images and
+//! volumes) and free of validation messages; a case in `MEETS_GOAL` must meet its goal, and every
+//! other case must at least not be worse than `--paper` (the original) on its own measure.
+
+mod gpu;
+
+use std::sync::Mutex;
+use voxgi::hard::{Env, CASES};
+
+/// Image side, grid side and reference samples per pixel of the tests (the report uses 64, 64,
+/// 256: `voxgi hard-cases`).
+const SIZE: u32 = 48;
+const VOXELS: u32 = 64;
+const REF_SPP: u32 = 64;
+
+/// The cases whose goal the defaults meet (the others are open work, listed in
+/// docs/hard-cases.md with their measured values).
+const MEETS_GOAL: &[&str] = &[
+    "density-300",
+    "density-3000",
+    "scale-1mm",
+    "scale-10km",
+    "translated-1e5",
+    "degenerate",
+    "light-zero",
+    "light-1e6",
+    "light-inside-geometry",
+    "sun-along-axis",
+    "sun-grazing",
+    "emissive-dynamic",
+    "grazing-surfaces",
+    "cones-leave-grid",
+    "empty-scene",
+    "single-triangle",
+    "no-light",
+];
+
+/// One validated context for all cases: lavapipe's instance creation is slow and the cases run
+/// one at a time anyway (each renders at 48x48 and path-traces a reference on both cores).
+static ENV: Mutex<Option<Env>> = Mutex::new(None);
+
+fn check(name: &str) {
+    let case = CASES
+        .iter()
+        .find(|c| c.name == name)
+        .unwrap_or_else(|| panic!("no hard case {name}"));
+    let mut guard = ENV.lock().unwrap_or_else(|e| e.into_inner());
+    let env = guard
+        .get_or_insert_with(|| Env::new(gpu::context(), SIZE, VOXELS, REF_SPP).expect("scratch"));
+    let default = env.run(case, &env.settings(false));
+    assert_eq!(
+        default.validation_messages,
+        0,
+        "{name}: validation messages:\n{}",
+        env.ctx.stats.messages().join("\n")
+    );
+    if let Some(e) = &default.error {
+        // A grid larger than the device binds (lavapipe: 128 MiB storage buffers) must be
+        // refused up front, with the limit and a grid that fits.
+        if name == "grid-512" && e.contains("maxStorageBufferRange") && e.contains("--voxels") {
+            return;
+        }
+        panic!("{name}: {e}");
+    }
+    assert!(
+        default.non_finite.is_empty(),
+        "{name}: {:?}",
+        default.non_finite
+    );
+    assert!(default.value.is_finite(), "{name}: value {}", default.value);
+    if MEETS_GOAL.contains(&name) {
+        assert!(
+            case.goal.met(default.value),
+            "{name}: {} {} misses the goal {}",
+            case.metric,
+            default.value,
+            case.goal
+        );
+    } else {
+        let paper = env.run(case, &env.settings(true));
+        if paper.error.is_none() && paper.value.is_finite() {
+            assert!(
+                default.value <= paper.value * 1.05,
+                "{name}: {} {} at the defaults, {} with --paper",
+                case.metric,
+                default.value,
+                paper.value
+            );
+        }
+    }
+}
+
+macro_rules! cases {
+    ($($f:ident => $name:literal,)*) => {
+        $(#[test] fn $f() { check($name) })*
+
+        #[test]
+        fn every_case_has_a_test() {
+            let tested = [$($name),*];
+            for c in CASES {
+                assert!(tested.contains(&c.name), "no test for the hard case {}", c.name);
+            }
+            for n in MEETS_GOAL {
+                assert!(tested.contains(n), "{n} in MEETS_GOAL is not a case");
+            }
+        }
+    };
+}
+
+cases! {
+    leak_wall_0 => "leak-wall-0",
+    leak_wall_1cm => "leak-wall-1cm",
+    leak_floor_1cm => "leak-floor-1cm",
+    density_300 => "density-300",
+    density_3000 => "density-3000",
+    two_sided_panel => "two-sided-panel",
+    scale_1mm => "scale-1mm",
+    scale_10km => "scale-10km",
+    translated_1e5 => "translated-1e5",
+    degenerate => "degenerate",
+    light_zero => "light-zero",
+    light_1e6 => "light-1e6",
+    light_inside_geometry => "light-inside-geometry",
+    spot_hard_edge => "spot-hard-edge",
+    sun_along_axis => "sun-along-axis",
+    sun_grazing => "sun-grazing",
+    emissive_1e4 => "emissive-1e4",
+    emissive_dynamic => "emissive-dynamic",
+    grazing_surfaces => "grazing-surfaces",
+    cones_leave_grid => "cones-leave-grid",
+    camera_in_volume => "camera-in-volume",
+    camera_in_voxel => "camera-in-voxel",
+    grid_48 => "grid-48",
+    grid_100 => "grid-100",
+    grid_8 => "grid-8",
+    grid_512 => "grid-512",
+    empty_scene => "empty-scene",
+    single_triangle => "single-triangle",
+    no_light => "no-light",
+    furnace => "furnace",
+}
