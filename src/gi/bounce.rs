@@ -3,6 +3,7 @@
 
 use super::inject::{read_voxel_data, voxel_data_descs};
 use super::volumes::Volumes;
+use crate::render::gpu::as_bytes;
 use crate::render::pipelines::{self, Desc, DescriptorPool, Pipeline, Set, SetLayout, Spec};
 use crate::vk::{vk, Access, Buffer, Context, Graph, VkResult};
 use gpu_allocator::MemoryLocation;
@@ -97,33 +98,13 @@ impl Bounce {
         g: &mut Graph,
         volumes: &Volumes,
         scene_set: vk::DescriptorSet,
+        voxels_changed: bool,
     ) {
         let d = &ctx.device;
-        let n = volumes.grid.resolution;
-        g.pass("voxel list clear")
-            .buffer(&self.list, Access::TransferWrite)
-            .untimed()
-            .record(|cmd| unsafe {
-                // Dispatch (0, 1, 1), count 0.
-                let head: [u8; 16] = words_le([0, 1, 1, 0]);
-                d.cmd_update_buffer(cmd, self.list.raw, 0, &head);
-            });
-        read_voxel_data(g.pass("voxel list"), volumes)
-            .buffer(&self.list, Access::ComputeStorageReadWrite)
-            .record(|cmd| unsafe {
-                let p = &self.list_pipeline;
-                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, p.raw);
-                d.cmd_bind_descriptor_sets(
-                    cmd,
-                    vk::PipelineBindPoint::COMPUTE,
-                    p.layout,
-                    0,
-                    &[scene_set, self.set.raw],
-                    &[],
-                );
-                let groups = n.div_ceil(4);
-                d.cmd_dispatch(cmd, groups, groups, groups);
-            });
+        // The list holds until the voxels change (static ones once, dynamic ones every frame).
+        if voxels_changed {
+            self.record_list(d, g, volumes, scene_set);
+        }
         let mut pass = read_voxel_data(g.pass("bounce"), volumes)
             .image(&volumes.radiance, Access::ComputeStorageReadWrite)
             .buffer(&self.list, Access::ComputeIndirectRead);
@@ -131,26 +112,34 @@ impl Bounce {
             pass = pass.image(f, Access::ComputeSampled);
         }
         pass.record(|cmd| unsafe {
-            let p = &self.pipeline;
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, p.raw);
-            d.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                p.layout,
-                0,
-                &[scene_set, self.set.raw, self.cone_set.raw],
-                &[],
-            );
+            self.pipeline
+                .bind_compute(d, cmd, &[scene_set, self.set.raw, self.cone_set.raw]);
             d.cmd_dispatch_indirect(cmd, self.list.raw, 0);
         });
     }
-}
 
-/// Little-endian bytes of four words.
-fn words_le(w: [u32; 4]) -> [u8; 16] {
-    let mut b = [0u8; 16];
-    for (i, v) in w.iter().enumerate() {
-        b[4 * i..4 * i + 4].copy_from_slice(&v.to_le_bytes());
+    /// Clears the list's count and dispatch, then lists the filled voxels.
+    fn record_list(
+        &self,
+        d: &ash::Device,
+        g: &mut Graph,
+        volumes: &Volumes,
+        scene_set: vk::DescriptorSet,
+    ) {
+        g.pass("voxel list clear")
+            .buffer(&self.list, Access::TransferWrite)
+            .untimed()
+            .record(|cmd| unsafe {
+                // Dispatch (0, 1, 1), count 0.
+                d.cmd_update_buffer(cmd, self.list.raw, 0, as_bytes(&[0u32, 1, 1, 0]));
+            });
+        read_voxel_data(g.pass("voxel list"), volumes)
+            .buffer(&self.list, Access::ComputeStorageReadWrite)
+            .record(|cmd| unsafe {
+                self.list_pipeline
+                    .bind_compute(d, cmd, &[scene_set, self.set.raw]);
+                let groups = volumes.grid.resolution.div_ceil(4);
+                d.cmd_dispatch(cmd, groups, groups, groups);
+            });
     }
-    b
 }

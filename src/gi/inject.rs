@@ -94,16 +94,8 @@ impl Inject {
             .image(shadow_map, Access::ComputeSampled)
             .image(&volumes.radiance, Access::ComputeStorageWrite)
             .record(|cmd| unsafe {
-                let p = &self.pipeline;
-                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, p.raw);
-                d.cmd_bind_descriptor_sets(
-                    cmd,
-                    vk::PipelineBindPoint::COMPUTE,
-                    p.layout,
-                    0,
-                    &[scene_set, self.set.raw],
-                    &[],
-                );
+                self.pipeline
+                    .bind_compute(d, cmd, &[scene_set, self.set.raw]);
                 let groups = n.div_ceil(4);
                 d.cmd_dispatch(cmd, groups, groups, groups);
             });

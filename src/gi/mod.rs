@@ -375,7 +375,8 @@ impl Gi {
             inject.record(ctx, g, &self.volumes, scene_set, shadow_map);
             mip.record(ctx, g, &self.volumes, "");
             if let Some(b) = &self.bounce {
-                b.record(ctx, g, &self.volumes, scene_set);
+                let voxels_changed = self.static_dirty || self.dynamic;
+                b.record(ctx, g, &self.volumes, scene_set, voxels_changed);
                 mip.record(ctx, g, &self.volumes, " (bounce)");
             }
         }

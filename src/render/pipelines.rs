@@ -215,6 +215,29 @@ pub struct Pipeline {
     pub push_stages: vk::ShaderStageFlags,
 }
 
+impl Pipeline {
+    /// Binds this compute pipeline and its descriptor sets from set 0, for a dispatch.
+    ///
+    /// # Safety
+    /// `cmd` is recording and the sets match the pipeline's layout.
+    pub unsafe fn bind_compute(
+        &self,
+        d: &ash::Device,
+        cmd: vk::CommandBuffer,
+        sets: &[vk::DescriptorSet],
+    ) {
+        d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.raw);
+        d.cmd_bind_descriptor_sets(
+            cmd,
+            vk::PipelineBindPoint::COMPUTE,
+            self.layout,
+            0,
+            sets,
+            &[],
+        );
+    }
+}
+
 impl Drop for Pipeline {
     fn drop(&mut self) {
         unsafe {
