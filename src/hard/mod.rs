@@ -143,6 +143,13 @@ impl Env {
     pub fn load(&mut self, name: &str, b: &SceneBuilder) -> Result<Scene> {
         let path = self.scratch.join(format!("{name}.glb"));
         std::fs::write(&path, b.to_glb()).with_context(|| format!("writing {}", path.display()))?;
+        // With VOXGI_HARD_DUMP the scenes are kept too, for `voxgi render` to look into.
+        if let Some(dir) = std::env::var_os("VOXGI_HARD_DUMP") {
+            let keep = PathBuf::from(dir).join(format!("{name}.glb"));
+            if let Err(e) = std::fs::copy(&path, &keep) {
+                eprintln!("VOXGI_HARD_DUMP: {}: {e}", keep.display());
+            }
+        }
         let scene = crate::scene::load(&path)?;
         self.warnings.extend(scene.warnings.iter().cloned());
         Ok(scene)
