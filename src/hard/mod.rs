@@ -139,13 +139,14 @@ impl Env {
         }
     }
 
-    /// Writes `b` as a .glb and loads it back, as a user's file would be.
+    /// Writes `b` as a .glb and loads it back, as a user's file would be; the .glb is also kept
+    /// in [`dump_dir`] when set.
     pub fn load(&mut self, name: &str, b: &SceneBuilder) -> Result<Scene> {
         let path = self.scratch.join(format!("{name}.glb"));
         std::fs::write(&path, b.to_glb()).with_context(|| format!("writing {}", path.display()))?;
-        // With VOXGI_HARD_DUMP the scenes are kept too, for `voxgi render` to look into.
-        if let Some(dir) = std::env::var_os("VOXGI_HARD_DUMP") {
-            let keep = PathBuf::from(dir).join(format!("{name}.glb"));
+        // Kept for `voxgi render` to look into.
+        if let Some(dir) = dump_dir() {
+            let keep = dir.join(format!("{name}.glb"));
             if let Err(e) = std::fs::copy(&path, &keep) {
                 eprintln!("VOXGI_HARD_DUMP: {}: {e}", keep.display());
             }
@@ -155,11 +156,11 @@ impl Env {
         Ok(scene)
     }
 
-    /// With VOXGI_HARD_DUMP=DIR, every image a case makes is saved there (.exr), in order.
+    /// Every image a case makes, saved to [`dump_dir`] (.exr and .png), in order.
     fn dump(&mut self, what: &str, img: &RadianceImage) {
-        if let Some(dir) = std::env::var_os("VOXGI_HARD_DUMP") {
+        if let Some(dir) = dump_dir() {
             self.dumped += 1;
-            let path = PathBuf::from(dir).join(format!("{:03}-{what}.exr", self.dumped));
+            let path = dir.join(format!("{:03}-{what}.exr", self.dumped));
             for p in [path.clone(), path.with_extension("png")] {
                 if let Err(e) = crate::output::save(img, &p, 0.0) {
                     eprintln!("VOXGI_HARD_DUMP: {e}");
@@ -370,4 +371,9 @@ pub fn table(rows: &[Row]) -> String {
         ));
     }
     s
+}
+
+/// VOXGI_HARD_DUMP=DIR: where the cases' images and scenes are kept, if anywhere.
+fn dump_dir() -> Option<PathBuf> {
+    std::env::var_os("VOXGI_HARD_DUMP").map(PathBuf::from)
 }
