@@ -17,7 +17,11 @@ USAGE:
                [--voxels N] [--bounces 1|2] [--paper] [--cones N] [--aperture DEG]
                [--step F] [--voxel-shadows] [--cone-shadows]
                [--frames N] [--exposure EV] [--shadow-res N] [--sun EL,AZ[,E]]
-               [--validate] [--timings] [--device NAME]
+               [--spin NODE] [--time T] [--validate] [--timings] [--device NAME]
+  voxgi view [SCENE] [--width W] [--height H] [--mode MODE] [--voxels N] [--bounces 1|2]
+             [--paper] [--exposure EV] [--sun EL,AZ[,E]] [--spin NODE] [--no-vsync]
+             [--frames N] [--screenshot FILE.png] [--resize FRAME:WxH].. [--press FRAME:KEY]..
+             [--validate] [--timings] [--device NAME]
   voxgi info SCENE [render options]
   voxgi reference [SCENE] [--spp N] [--out FILE.exr] [--width W] [--height H] [--seed S]
                   [--sun EL,AZ[,E]]
@@ -49,6 +53,18 @@ USAGE:
   --validate   Khronos validation with synchronization validation; any message fails the run
   --timings    print each pass's median GPU time
   --device NAME           use the Vulkan device whose name contains NAME
+  --spin NODE  turn the node named NODE about its vertical axis, a quarter turn per second
+               (voxelized every frame, apart from the static geometry); glTF animations play
+  --time T     render: the moving scene (animations, --spin) as it is T seconds in
+  view         the renderer in a window with a free camera (keys: press H, or see the
+               README); the title shows the settings and per-pass times
+  --no-vsync   view: present without waiting for the display (mailbox or immediate)
+  --frames N   view: render N frames, time advancing 1/60 s each, then exit
+  --screenshot FILE.png   view: after the last frame, save the window's image
+  --resize FRAME:WxH      view: ask for a new window size at frame FRAME (repeatable)
+  --press FRAME:KEY       view: press KEY at frame FRAME, release it at the next (repeatable;
+                          KEY as in the controls: a letter, a digit, [ ] - =, space, f12,
+                          optionally shift+KEY), for scripted runs and tests
   reference    CPU path-traced ground truth (all cores; --spp default 64, --seed default 0)
   hard-cases   runs the hard cases (light leaks, density, precision, degenerate input,
                extreme lights, cones at the edges; all of them or those named), each with
@@ -87,6 +103,7 @@ const FLAGS: &[&str] = &[
     "--paper",
     "--voxel-shadows",
     "--cone-shadows",
+    "--no-vsync",
 ];
 const VALUED: &[&str] = &[
     "--out",
@@ -110,6 +127,11 @@ const VALUED: &[&str] = &[
     "--warmup",
     "--ref-spp",
     "--size",
+    "--spin",
+    "--time",
+    "--screenshot",
+    "--resize",
+    "--press",
 ];
 
 impl Args {
@@ -143,6 +165,14 @@ impl Args {
             .rev()
             .find(|(n, _)| n == name)
             .and_then(|(_, v)| v.as_deref())
+    }
+    /// Every value of a repeatable option, in order.
+    fn values(&self, name: &str) -> Vec<&str> {
+        self.options
+            .iter()
+            .filter(|(n, _)| n == name)
+            .filter_map(|(_, v)| v.as_deref())
+            .collect()
     }
     fn number<T: std::str::FromStr>(&self, name: &str, default: T) -> Result<T> {
         match self.value(name) {
@@ -242,7 +272,7 @@ fn render_settings(args: &Args) -> Result<RenderSettings> {
 
 /// The voxel passes' settings from the command line.
 fn gi_settings(args: &Args) -> Result<GiSettings> {
-    let voxels: u32 = args.number("--voxels", 128)?;
+    let voxels: u32 = args.number("--voxels", GiSettings::default().voxels)?;
     if !(4..=1024).contains(&voxels) {
         bail!("--voxels {voxels} is out of range (4 to 1024)");
     }
@@ -275,6 +305,102 @@ fn gi_settings(args: &Args) -> Result<GiSettings> {
     Ok(gi)
 }
 
+/// `--spin NODE` and `--time T`: what moves and when the image is taken.
+fn motion(args: &Args, scene: &Scene) -> Result<(scene::Motion, f32)> {
+    let spin = args
+        .value("--spin")
+        .map(|name| scene.spin(name))
+        .transpose()
+        .map_err(anyhow::Error::msg)?;
+    let time: f32 = args.number("--time", 0.0)?;
+    if !time.is_finite() || time < 0.0 {
+        bail!("--time {time} must be a finite number of seconds, 0 or more");
+    }
+    Ok((
+        scene::Motion {
+            spin,
+            animate: true,
+        },
+        time,
+    ))
+}
+
+/// `voxgi view`: the renderer in a window.
+fn view(args: &Args) -> Result<()> {
+    let scene_path = match args.positional.as_slice() {
+        [] => default_scene(),
+        [s] => PathBuf::from(s),
+        more => bail!("view takes one scene, got {}", more.len()),
+    };
+    let screenshot = args.value("--screenshot").map(PathBuf::from);
+    if let Some(p) = &screenshot {
+        let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("");
+        if !ext.eq_ignore_ascii_case("png") {
+            bail!("{}: screenshots are PNG files (.png)", p.display());
+        }
+    }
+    let frames = args
+        .value("--frames")
+        .map(|_| args.number::<u32>("--frames", 1))
+        .transpose()?;
+    if frames == Some(0) {
+        bail!("--frames must be 1 or more");
+    }
+    if screenshot.is_some() && frames.is_none() {
+        bail!("--screenshot goes with --frames N (F12 saves screenshots while flying)");
+    }
+    let resizes = args
+        .values("--resize")
+        .into_iter()
+        .map(voxgi::view::parse_resize)
+        .collect::<Result<Vec<_>>>()?;
+    let presses = args
+        .values("--press")
+        .into_iter()
+        .map(voxgi::view::parse_press)
+        .collect::<Result<Vec<_>>>()?;
+    let settings = render_settings(args)?;
+    let mut scene = load_scene(&scene_path)?;
+    if let Some(spec) = args.value("--sun") {
+        scene.lights.push(parse_sun(spec)?);
+    }
+    let (motion, _) = motion(args, &scene)?;
+    let validating = args.flag("--validate");
+    let report = voxgi::view::run(voxgi::view::ViewOptions {
+        scene,
+        settings,
+        vsync: !args.flag("--no-vsync"),
+        frames,
+        screenshot,
+        resizes,
+        presses,
+        spin: motion.spin,
+        exposure: args.number("--exposure", 0.0)?,
+        timings: args.flag("--timings"),
+        validate: validating,
+        device: args.value("--device").map(String::from),
+    })?;
+    if let Some(ms) = report.median_frame_ms {
+        eprintln!(
+            "{} frames, median frame time {ms:.1} ms (submit to fence)",
+            report.frames
+        );
+    }
+    if !report.leaked.is_empty() {
+        bail!(
+            "GPU memory still allocated at exit: {}",
+            report.leaked.join(", ")
+        );
+    }
+    if validating && report.validation_messages > 0 {
+        bail!(
+            "validation reported {} message(s)",
+            report.validation_messages
+        );
+    }
+    Ok(())
+}
+
 fn render(args: &Args) -> Result<()> {
     let scene_path = match args.positional.as_slice() {
         [] => default_scene(),
@@ -304,12 +430,18 @@ fn render(args: &Args) -> Result<()> {
             scene_path.display()
         );
     }
+    let (motion, time) = motion(args, &scene)?;
+    let mut settings = settings;
+    settings.dynamic_nodes = motion.prepare(&mut scene);
     let ctx = context(args)?;
     let stats = ctx.stats.clone();
     let validating = ctx.validating;
     eprintln!("device: {}", ctx.device_info);
     let image = {
         let mut renderer = Renderer::new(&ctx, &scene, settings)?;
+        for (node, world) in motion.pose(&scene, time) {
+            renderer.set_node_transform(node, world);
+        }
         for f in 0..frames {
             renderer.render(f + 1 == frames)?;
         }
@@ -628,6 +760,7 @@ fn run() -> Result<()> {
     }
     match cmd.as_str() {
         "render" => render(&args),
+        "view" => view(&args),
         "info" => info(&args),
         "reference" => reference(&args),
         "compare" => compare(&args),

@@ -173,6 +173,10 @@ pub struct Renderer {
     /// Test hook: record this pass without its barriers.
     pub omit_barriers_of: Option<String>,
     light_count: u32,
+    /// The shadow maps must be drawn (first frame, or a light or a node moved).
+    shadows_dirty: bool,
+    /// The scene's bounds (light views are fitted to them).
+    bounds: crate::scene::Aabb,
     /// Per instance: moved by a dynamic node (voxelized every frame).
     dynamic_instances: Vec<bool>,
     /// The node of each instance.
@@ -559,6 +563,8 @@ impl Renderer {
                 })
                 .collect(),
             light_count: scene.lights.len() as u32,
+            bounds: scene.bounds,
+            shadows_dirty: true,
             dynamic_instances,
             instance_nodes: scene.instances.iter().map(|i| i.node).collect(),
             gi,
@@ -702,6 +708,19 @@ impl Renderer {
     /// Renders one frame and waits for it. With `readback`, the radiance image is copied to
     /// host memory for `radiance()`.
     pub fn render(&mut self, readback: bool) -> VkResult<()> {
+        self.render_with(readback, &[], &[], &mut |_, _| {})
+    }
+
+    /// Renders one frame, letting `after` record further passes that read the radiance image
+    /// (a window's display pass) in the same command buffer, whose submission waits for
+    /// `waits` and signals `signals`; then waits for it.
+    pub fn render_with(
+        &mut self,
+        readback: bool,
+        waits: &[vk::SemaphoreSubmitInfo],
+        signals: &[vk::SemaphoreSubmitInfo],
+        after: &mut dyn FnMut(&mut Graph, &Image),
+    ) -> VkResult<()> {
         self.write_uniforms();
         let ctx = self.ctx.clone();
         let d = &ctx.device;
@@ -728,6 +747,7 @@ impl Renderer {
             let mut g = Graph::new(&ctx, cmd, &mut states, timer.as_mut());
             g.omit_barriers_of = self.omit_barriers_of.clone();
             self.record(&mut g, readback);
+            after(&mut g, &self.hdr);
         }
         self.states = states;
         unsafe { d.end_command_buffer(cmd) }.map_err(|result| VkError::Call {
@@ -735,13 +755,14 @@ impl Renderer {
             result,
         })?;
         let start = std::time::Instant::now();
-        let submitted = ctx.submit_and_wait(cmd);
+        let submitted = ctx.submit_and_wait_with(cmd, waits, signals);
         self.frame_ms.push(start.elapsed().as_secs_f64() * 1e3);
         if let Some(t) = timer.as_mut() {
             t.collect()?;
         }
         self.timer = timer;
         submitted?;
+        self.shadows_dirty = false;
         // The static voxels now hold the static geometry until a static node moves.
         if let Some(gi) = self.gi.as_mut() {
             gi.static_dirty = false;
@@ -754,7 +775,8 @@ impl Renderer {
         let d = &ctx.device;
         let res = self.settings.shadow_resolution;
 
-        if self.gpu.shadow_view_count > 0 {
+        // Shadow maps change only when a light or a node moves.
+        if self.gpu.shadow_view_count > 0 && self.shadows_dirty {
             let mut pass = g
                 .pass("shadows")
                 .image(&self.shadow_map, Access::DepthAttachmentWrite)
@@ -948,12 +970,14 @@ impl Renderer {
 
     /// Moves every instance of a glTF node. A dynamic node is voxelized again every frame
     /// anyway; moving a static node voxelizes the static geometry again on the next frame.
+    /// Either way the next frame draws the shadow maps again.
     pub fn set_node_transform(&mut self, node: usize, world: Mat4) {
         let mut moved_static = false;
         for (i, &n) in self.instance_nodes.iter().enumerate() {
-            if n == node {
+            if n == node && self.transforms[i] != world {
                 self.transforms[i] = world;
                 moved_static |= !self.dynamic_instances[i];
+                self.shadows_dirty = true;
             }
         }
         if let (true, Some(gi)) = (moved_static, self.gi.as_mut()) {
@@ -961,7 +985,45 @@ impl Renderer {
         }
     }
 
-    /// The passes a frame records, in order (what `--timings` will list).
+    /// Moves or changes the lights (one per scene light, each of its kind as loaded, so the
+    /// shadow views keep their number): the next frame draws their shadow maps and lights the
+    /// voxels with them.
+    pub fn set_lights(&mut self, lights: &[crate::scene::Light]) -> VkResult<()> {
+        use super::gpu::GpuLight;
+        use super::shadows::light_views;
+        let views = light_views(
+            lights,
+            &self.bounds,
+            self.settings.shadow_resolution,
+            self.settings.pcf_radius,
+        );
+        let counts: Vec<usize> = views.iter().map(|v| v.views.len()).collect();
+        let before: Vec<usize> = self.gpu.light_views.iter().map(|v| v.views.len()).collect();
+        if lights.len() as u32 != self.light_count || counts != before {
+            return Err(VkError::Request(
+                "set_lights: the lights must keep their number and kinds".into(),
+            ));
+        }
+        let gpu_lights: Vec<GpuLight> = lights
+            .iter()
+            .zip(&views)
+            .map(|(l, v)| GpuLight::from_light(l, v.first, v.views.len() as u32))
+            .collect();
+        let all_views: Vec<_> = views.iter().flat_map(|v| v.views.iter().copied()).collect();
+        // The previous frame was waited for: nothing on the GPU reads these now.
+        if !gpu_lights.is_empty() {
+            self.gpu.lights.write(0, as_bytes(&gpu_lights));
+        }
+        if !all_views.is_empty() {
+            self.gpu.shadow_views.write(0, as_bytes(&all_views));
+        }
+        self.gpu.light_views = views;
+        self.shadows_dirty = true;
+        Ok(())
+    }
+
+    /// The passes a frame records, in order (what `--timings` will list; the shadow maps only
+    /// on the first frame and after a light or a node moved).
     pub fn passes(&self) -> Vec<String> {
         let mut p = Vec::new();
         if self.gpu.shadow_view_count > 0 {
@@ -1012,6 +1074,11 @@ impl Renderer {
                 [f(0), f(4), f(8)]
             })
             .collect()
+    }
+
+    /// The frame's linear radiance (RGBA32F, storage in GENERAL), for passes that follow.
+    pub fn radiance_image(&self) -> &Image {
+        &self.hdr
     }
 
     pub fn context(&self) -> &Arc<Context> {

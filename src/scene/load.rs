@@ -6,6 +6,7 @@
 //! byte range here, so that no input can make the loader panic.
 
 use super::accessor::Buffers;
+use super::animation::{Animation, Channel, Interpolation, Node, Property};
 use super::geometry::{self, RawPrimitive, Topology};
 use super::material::load_materials;
 use super::{Aabb, Camera, Instance, Light, LightKind, Material, Primitive, Scene, SceneError};
@@ -80,9 +81,11 @@ fn load_inner(path: &Path) -> Result<Scene, String> {
         morph_warned: false,
         skin_warned: false,
         origin: DVec3::ZERO,
+        nodes: root.nodes.iter().map(rest_node).collect(),
     };
     loader.origin = loader.find_origin();
     loader.walk()?;
+    let animations = loader.animations();
 
     let Loader {
         vertices,
@@ -94,6 +97,7 @@ fn load_inner(path: &Path) -> Result<Scene, String> {
         camera_node,
         mut warnings,
         origin,
+        nodes,
         ..
     } = loader;
 
@@ -125,6 +129,8 @@ fn load_inner(path: &Path) -> Result<Scene, String> {
         camera,
         bounds,
         origin,
+        nodes,
+        animations,
         warnings,
     })
 }
@@ -463,6 +469,8 @@ struct Loader<'a> {
     skin_warned: bool,
     /// See `Scene::origin`.
     origin: DVec3,
+    /// Every node of the file; the walk sets the parents of those it reaches.
+    nodes: Vec<Node>,
 }
 
 fn mesh_label(index: usize, mesh: &json::Mesh) -> String {
@@ -476,6 +484,23 @@ fn node_label(index: usize, node: &json::Node) -> String {
     match &node.name {
         Some(n) => format!("node {index} ('{n}')"),
         None => format!("node {index}"),
+    }
+}
+
+/// A node's name and rest pose (no parent yet; the walk sets it).
+fn rest_node(node: &json::Node) -> Node {
+    let rotation = Quat::from_array(node.rotation.map_or([0.0, 0.0, 0.0, 1.0], |r| r.0));
+    Node {
+        name: node.name.clone(),
+        parent: None,
+        translation: Vec3::from(node.translation.unwrap_or([0.0; 3])),
+        rotation: if rotation.is_finite() && rotation.length_squared() > 1e-12 {
+            rotation.normalize()
+        } else {
+            Quat::IDENTITY
+        },
+        scale: Vec3::from(node.scale.unwrap_or([1.0; 3])),
+        matrix: node.matrix.map(|m| Mat4::from_cols_array(&m)),
     }
 }
 
@@ -587,14 +612,14 @@ impl Loader<'_> {
     fn walk(&mut self) -> Result<(), String> {
         let root = self.root;
         let to_local = DMat4::from_translation(-self.origin);
-        let mut stack: Vec<(usize, DMat4)> = self
+        let mut stack: Vec<(usize, DMat4, Option<usize>)> = self
             .root_nodes()
             .into_iter()
             .rev()
-            .map(|n| (n, to_local))
+            .map(|n| (n, to_local, None))
             .collect();
         let mut visited = vec![false; root.nodes.len()];
-        while let Some((n, parent)) = stack.pop() {
+        while let Some((n, parent, parent_index)) = stack.pop() {
             let Some(node) = root.nodes.get(n) else {
                 self.warn(format!(
                     "node {n} is referenced but does not exist (the file has {} nodes); ignored",
@@ -620,6 +645,7 @@ impl Loader<'_> {
                 ));
                 continue;
             };
+            self.nodes[n].parent = parent_index;
             if let Some(mesh) = node.mesh {
                 self.place_mesh(mesh.value(), n, node, world)?;
             }
@@ -642,10 +668,124 @@ impl Loader<'_> {
                 self.place_light(l.light.value(), &label, world);
             }
             for c in node.children.iter().flatten().rev() {
-                stack.push((c.value(), world64));
+                stack.push((c.value(), world64, Some(n)));
             }
         }
         Ok(())
+    }
+
+    /// The file's animations of node translation, rotation and scale. A channel that cannot
+    /// be used (a missing node or accessor, keys out of order, counts that do not match) is
+    /// skipped with a warning; morph-target weights are not animated.
+    fn animations(&mut self) -> Vec<Animation> {
+        use json::animation::Property as P;
+        let root = self.root;
+        let mut out = Vec::new();
+        let mut weights_warned = false;
+        for (ai, a) in root.animations.iter().enumerate() {
+            let label = match &a.name {
+                Some(n) => format!("animation {ai} ('{n}')"),
+                None => format!("animation {ai}"),
+            };
+            let mut channels = Vec::new();
+            for (ci, c) in a.channels.iter().enumerate() {
+                let who = format!("{label} channel {ci}");
+                let property = match c.target.path {
+                    Checked::Valid(P::Translation) => Property::Translation,
+                    Checked::Valid(P::Rotation) => Property::Rotation,
+                    Checked::Valid(P::Scale) => Property::Scale,
+                    Checked::Valid(P::MorphTargetWeights) => {
+                        if !std::mem::replace(&mut weights_warned, true) {
+                            self.warn(format!(
+                                "{who} animates morph-target weights, which are not supported; \
+                                 ignored"
+                            ));
+                        }
+                        continue;
+                    }
+                    Checked::Invalid => {
+                        self.warn(format!("{who} has an unknown target path; ignored"));
+                        continue;
+                    }
+                };
+                match self.channel(a, c, property, &who) {
+                    Ok(ch) => channels.push(ch),
+                    Err(e) => self.warn(format!("{who}: {e}; ignored")),
+                }
+            }
+            if !channels.is_empty() {
+                out.push(Animation {
+                    name: a.name.clone(),
+                    channels,
+                });
+            }
+        }
+        out
+    }
+
+    fn channel(
+        &self,
+        a: &json::Animation,
+        c: &json::animation::Channel,
+        property: Property,
+        who: &str,
+    ) -> Result<Channel, String> {
+        use json::animation::Interpolation as I;
+        let node = c.target.node.value();
+        let Some(target) = self.root.nodes.get(node) else {
+            return Err(format!("node {node} does not exist"));
+        };
+        if target.matrix.is_some() {
+            return Err(format!(
+                "node {node} is placed by a matrix, which glTF does not animate"
+            ));
+        }
+        let Some(sampler) = a.samplers.get(c.sampler.value()) else {
+            return Err(format!("sampler {} does not exist", c.sampler.value()));
+        };
+        let interpolation = match sampler.interpolation {
+            Checked::Valid(I::Step) => Interpolation::Step,
+            Checked::Valid(I::Linear) => Interpolation::Linear,
+            Checked::Valid(I::CubicSpline) => Interpolation::CubicSpline,
+            Checked::Invalid => return Err("unknown interpolation".into()),
+        };
+        let times = self
+            .buffers
+            .read_f32(self.root, sampler.input.value(), who)?;
+        let values = self
+            .buffers
+            .read_f32(self.root, sampler.output.value(), who)?;
+        if times.is_empty() {
+            return Err("no keys".into());
+        }
+        if times.iter().any(|t| !t.is_finite()) || times.windows(2).any(|w| w[1] < w[0]) {
+            return Err("key times are not finite and increasing".into());
+        }
+        if values.iter().any(|v| !v.is_finite()) {
+            return Err("non-finite values".into());
+        }
+        let width = if property == Property::Rotation { 4 } else { 3 };
+        let per_key = width
+            * if interpolation == Interpolation::CubicSpline {
+                3
+            } else {
+                1
+            };
+        if values.len() != times.len() * per_key {
+            return Err(format!(
+                "{} keys need {} output values, the accessor has {}",
+                times.len(),
+                times.len() * per_key,
+                values.len()
+            ));
+        }
+        Ok(Channel {
+            node,
+            property,
+            interpolation,
+            times,
+            values,
+        })
     }
 
     fn place_mesh(

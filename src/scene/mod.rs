@@ -7,11 +7,13 @@ use glam::{Mat4, Vec3, Vec4};
 use std::path::PathBuf;
 
 mod accessor;
+pub mod animation;
 mod base64;
 pub mod builder;
 mod geometry;
 mod load;
 mod material;
+pub use animation::{Animation, Motion, Node, Spin};
 pub use load::{default_camera, load};
 
 /// Vertical field of view of the CONVENTIONS.md default camera.
@@ -269,6 +271,10 @@ pub struct Scene {
     /// lights, cameras and bounds are relative to it (precision far from the file's origin);
     /// add it for the file's coordinates.
     pub origin: glam::DVec3,
+    /// The file's nodes (for animation; `Instance::node` indexes them).
+    pub nodes: Vec<Node>,
+    /// Node animations (translation, rotation, scale).
+    pub animations: Vec<Animation>,
     pub warnings: Vec<String>,
 }
 

@@ -558,13 +558,27 @@ impl Context {
 
     /// Submits one command buffer and blocks until the GPU has finished it.
     pub fn submit_and_wait(&self, cmd: vk::CommandBuffer) -> VkResult<()> {
+        self.submit_and_wait_with(cmd, &[], &[])
+    }
+
+    /// Submits `cmd` after `waits` (e.g. a swapchain image's acquire), signalling `signals`
+    /// (e.g. its present), and waits for it on the host.
+    pub fn submit_and_wait_with(
+        &self,
+        cmd: vk::CommandBuffer,
+        waits: &[vk::SemaphoreSubmitInfo],
+        signals: &[vk::SemaphoreSubmitInfo],
+    ) -> VkResult<()> {
         let fence = unsafe {
             self.device
                 .create_fence(&vk::FenceCreateInfo::default(), None)
         }
         .check("vkCreateFence")?;
         let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
-        let submit = vk::SubmitInfo2::default().command_buffer_infos(&cmds);
+        let submit = vk::SubmitInfo2::default()
+            .command_buffer_infos(&cmds)
+            .wait_semaphore_infos(waits)
+            .signal_semaphore_infos(signals);
         let r = unsafe {
             self.device
                 .queue_submit2(self.queue, &[submit], fence)

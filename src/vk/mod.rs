@@ -33,6 +33,9 @@ pub enum VkError {
         name: String,
         source: gpu_allocator::AllocationError,
     },
+    /// A call the renderer cannot honour as asked (the message says why).
+    #[error("{0}")]
+    Request(String),
     #[error("shader {0} is not among the compiled shaders")]
     NoShader(String),
     #[error(

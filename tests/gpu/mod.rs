@@ -38,6 +38,8 @@ pub fn empty_scene() -> Scene {
         },
         bounds: Aabb::EMPTY,
         origin: glam::DVec3::ZERO,
+        nodes: vec![],
+        animations: vec![],
         warnings: vec![],
     }
 }

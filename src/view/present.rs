@@ -1,0 +1,290 @@
+//! The window's last passes: the display image (exposure, tone curve, sRGB, as `voxgi render`
+//! writes a PNG) and its copy into the acquired swapchain image, plus screenshots.
+
+use crate::render::pipelines::{self, Desc, DescriptorPool, Pipeline, Set, Spec};
+use crate::vk::{vk, Access, Buffer, Context, Graph, Image, ImageDesc, VkResult};
+use gpu_allocator::MemoryLocation;
+use std::sync::Arc;
+
+#[repr(C)]
+#[derive(Clone, Copy)]
+struct DisplayPush {
+    scale: f32,
+    encode_srgb: u32,
+}
+
+/// Where a frame goes: an acquired swapchain image.
+pub struct Target {
+    pub image: vk::Image,
+    pub extent: vk::Extent2D,
+    pub encode_srgb: bool,
+    /// The image can be copied from (else screenshots read the display image).
+    pub readable: bool,
+    /// Its bytes are B, G, R, A (else R, G, B, A).
+    pub bgra: bool,
+}
+
+pub struct Display {
+    ctx: Arc<Context>,
+    pipeline: Pipeline,
+    set: Set,
+    _pool: DescriptorPool,
+    image: Image,
+    /// Host copy of the last screenshot asked for, and its width, height and byte order
+    /// (true: B, G, R, A).
+    shot: Option<Buffer>,
+    shot_shape: (u32, u32, bool),
+    width: u32,
+    height: u32,
+}
+
+/// A screenshot: 8-bit RGB rows, top first.
+pub struct Shot {
+    pub width: u32,
+    pub height: u32,
+    pub rgb: Vec<u8>,
+}
+
+impl Display {
+    /// For a renderer whose radiance image is `radiance` (width x height).
+    pub fn new(ctx: &Arc<Context>, radiance: &Image) -> VkResult<Display> {
+        let (width, height) = (radiance.desc.extent.width, radiance.desc.extent.height);
+        let image = Image::new(
+            ctx,
+            "display",
+            ImageDesc::d2(
+                vk::Format::R8G8B8A8_UNORM,
+                width,
+                height,
+                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+            ),
+        )?;
+        let pool = DescriptorPool::new(
+            ctx,
+            &[vk::DescriptorPoolSize {
+                ty: vk::DescriptorType::STORAGE_IMAGE,
+                descriptor_count: 2,
+            }],
+            1,
+        )?;
+        let set = pool.set(
+            vk::ShaderStageFlags::COMPUTE,
+            &[
+                (0, Desc::StorageImage(radiance.view)),
+                (1, Desc::StorageImage(image.view)),
+            ],
+        )?;
+        let pipeline = pipelines::compute(
+            ctx,
+            "display.comp",
+            &[&set.layout],
+            std::mem::size_of::<DisplayPush>() as u32,
+            &Spec(vec![]),
+        )?;
+        Ok(Display {
+            ctx: ctx.clone(),
+            pipeline,
+            set,
+            _pool: pool,
+            image,
+            shot: None,
+            shot_shape: (0, 0, false),
+            width,
+            height,
+        })
+    }
+
+    /// Records the display pass and the copy to `target`; with `screenshot`, also a copy of
+    /// the window's image into host memory for [`Display::screenshot`].
+    pub fn record(
+        &mut self,
+        g: &mut Graph,
+        radiance: &Image,
+        target: &Target,
+        exposure: f32,
+        screenshot: bool,
+    ) -> VkResult<()> {
+        let d = &self.ctx.device;
+        let push = DisplayPush {
+            scale: 2f32.powf(exposure),
+            encode_srgb: (!target.encode_srgb) as u32,
+        };
+        g.pass("display")
+            .image(radiance, Access::ComputeStorageRead)
+            .image(&self.image, Access::ComputeStorageWrite)
+            .record(|cmd| unsafe {
+                self.pipeline.bind_compute(d, cmd, &[self.set.raw]);
+                d.cmd_push_constants(
+                    cmd,
+                    self.pipeline.layout,
+                    vk::ShaderStageFlags::COMPUTE,
+                    0,
+                    crate::render::gpu::as_bytes(&[push]),
+                );
+                d.cmd_dispatch(cmd, self.width.div_ceil(8), self.height.div_ceil(8), 1);
+            });
+
+        if screenshot && self.shot.is_none() {
+            let bytes = target.extent.width.max(self.width) as u64
+                * target.extent.height.max(self.height) as u64
+                * 4;
+            self.shot = Some(Buffer::new(
+                &self.ctx,
+                "screenshot",
+                bytes,
+                vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuToCpu,
+            )?);
+        }
+        let shot_from_display = screenshot && !target.readable;
+        if screenshot {
+            self.shot_shape = if shot_from_display {
+                (self.width, self.height, false)
+            } else {
+                (target.extent.width, target.extent.height, target.bgra)
+            };
+        }
+        let shot = self.shot.as_ref().filter(|_| screenshot);
+        let color = vk::ImageSubresourceRange {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            base_mip_level: 0,
+            level_count: 1,
+            base_array_layer: 0,
+            layer_count: 1,
+        };
+        // The swapchain image is not one of the graph's resources: its barriers are written
+        // here. The frame's submission waits for the acquire at the transfer stage, so the
+        // transition out of UNDEFINED follows the acquire.
+        let barrier = |cmd,
+                       src: (vk::PipelineStageFlags2, vk::AccessFlags2),
+                       dst: (vk::PipelineStageFlags2, vk::AccessFlags2),
+                       old,
+                       new| {
+            let b = [vk::ImageMemoryBarrier2::default()
+                .src_stage_mask(src.0)
+                .src_access_mask(src.1)
+                .dst_stage_mask(dst.0)
+                .dst_access_mask(dst.1)
+                .old_layout(old)
+                .new_layout(new)
+                .image(target.image)
+                .subresource_range(color)];
+            unsafe {
+                d.cmd_pipeline_barrier2(
+                    cmd,
+                    &vk::DependencyInfo::default().image_memory_barriers(&b),
+                )
+            };
+        };
+        let transfer = vk::PipelineStageFlags2::TRANSFER;
+        let mut pass = g.pass("present").image(&self.image, Access::TransferRead);
+        if let Some(b) = shot {
+            pass = pass.buffer(b, Access::TransferWrite);
+        }
+        let (w, h) = (self.width, self.height);
+        pass.record(|cmd| {
+            barrier(
+                cmd,
+                (transfer, vk::AccessFlags2::NONE),
+                (transfer, vk::AccessFlags2::TRANSFER_WRITE),
+                vk::ImageLayout::UNDEFINED,
+                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            );
+            let layers = vk::ImageSubresourceLayers {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level: 0,
+                base_array_layer: 0,
+                layer_count: 1,
+            };
+            let corner = |x: u32, y: u32| vk::Offset3D {
+                x: x as i32,
+                y: y as i32,
+                z: 1,
+            };
+            let region = vk::ImageBlit::default()
+                .src_subresource(layers)
+                .src_offsets([vk::Offset3D::default(), corner(w, h)])
+                .dst_subresource(layers)
+                .dst_offsets([
+                    vk::Offset3D::default(),
+                    corner(target.extent.width, target.extent.height),
+                ]);
+            unsafe {
+                d.cmd_blit_image(
+                    cmd,
+                    self.image.raw,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    target.image,
+                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                    &[region],
+                    vk::Filter::NEAREST,
+                )
+            };
+            let mut layout = vk::ImageLayout::TRANSFER_DST_OPTIMAL;
+            let mut last = (transfer, vk::AccessFlags2::TRANSFER_WRITE);
+            if let Some(b) = shot {
+                let (src, src_layout, sw, sh) = if shot_from_display {
+                    (self.image.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, w, h)
+                } else {
+                    barrier(
+                        cmd,
+                        last,
+                        (transfer, vk::AccessFlags2::TRANSFER_READ),
+                        layout,
+                        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    );
+                    layout = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
+                    last = (transfer, vk::AccessFlags2::TRANSFER_READ);
+                    (
+                        target.image,
+                        layout,
+                        target.extent.width,
+                        target.extent.height,
+                    )
+                };
+                let copy = vk::BufferImageCopy::default()
+                    .image_subresource(layers)
+                    .image_extent(vk::Extent3D {
+                        width: sw,
+                        height: sh,
+                        depth: 1,
+                    });
+                unsafe { d.cmd_copy_image_to_buffer(cmd, src, src_layout, b.raw, &[copy]) };
+            }
+            // Presentation needs no access; the present waits on the frame's semaphore.
+            barrier(
+                cmd,
+                last,
+                (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE),
+                layout,
+                vk::ImageLayout::PRESENT_SRC_KHR,
+            );
+        });
+        if let Some(b) = shot {
+            g.pass("screenshot to host")
+                .buffer(b, Access::HostRead)
+                .untimed()
+                .record(|_| {});
+        }
+        Ok(())
+    }
+
+    /// The screenshot taken by the last frame recorded with `screenshot` (after it finished).
+    pub fn screenshot(&self) -> Option<Shot> {
+        let bytes = self.shot.as_ref()?.mapped()?;
+        let (w, h, bgra) = self.shot_shape;
+        let mut rgb = Vec::with_capacity((w * h * 3) as usize);
+        for px in bytes[..(w * h * 4) as usize].chunks_exact(4) {
+            if bgra {
+                rgb.extend([px[2], px[1], px[0]]);
+            } else {
+                rgb.extend([px[0], px[1], px[2]]);
+            }
+        }
+        Some(Shot {
+            width: w,
+            height: h,
+            rgb,
+        })
+    }
+}
