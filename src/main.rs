@@ -17,9 +17,11 @@ USAGE:
                [--voxels N] [--bounces 1|2] [--paper] [--cones N] [--aperture DEG]
                [--step F] [--voxel-shadows] [--cone-shadows]
                [--frames N] [--exposure EV] [--shadow-res N] [--sun EL,AZ[,E]]
-               [--spin NODE] [--time T] [--validate] [--timings] [--device NAME]
+               [--spin NODE [--spin-speed DEG]] [--time T]
+               [--validate] [--timings] [--device NAME]
   voxgi view [SCENE] [--width W] [--height H] [--mode MODE] [--voxels N] [--bounces 1|2]
-             [--paper] [--exposure EV] [--sun EL,AZ[,E]] [--spin NODE] [--no-vsync]
+             [--paper] [--exposure EV] [--sun EL,AZ[,E]] [--spin NODE [--spin-speed DEG]]
+             [--shadow-res N] [--no-vsync]
              [--frames N] [--screenshot FILE.png] [--resize FRAME:WxH].. [--press FRAME:KEY]..
              [--validate] [--timings] [--device NAME]
   voxgi info SCENE [render options]
@@ -53,8 +55,9 @@ USAGE:
   --validate   Khronos validation with synchronization validation; any message fails the run
   --timings    print each pass's median GPU time
   --device NAME           use the Vulkan device whose name contains NAME
-  --spin NODE  turn the node named NODE about its vertical axis, a quarter turn per second
-               (voxelized every frame, apart from the static geometry); glTF animations play
+  --spin NODE  turn the node named NODE about its vertical axis (voxelized every frame, apart
+               from the static geometry); glTF animations play
+  --spin-speed DEG        degrees per second of --spin (default 90)
   --time T     render: the moving scene (animations, --spin) as it is T seconds in
   view         the renderer in a window with a free camera (keys: press H, or see the
                README); the title shows the settings and per-pass times
@@ -132,6 +135,7 @@ const VALUED: &[&str] = &[
     "--screenshot",
     "--resize",
     "--press",
+    "--spin-speed",
 ];
 
 impl Args {
@@ -307,11 +311,19 @@ fn gi_settings(args: &Args) -> Result<GiSettings> {
 
 /// `--spin NODE` and `--time T`: what moves and when the image is taken.
 fn motion(args: &Args, scene: &Scene) -> Result<(scene::Motion, f32)> {
-    let spin = args
+    let mut spin = args
         .value("--spin")
         .map(|name| scene.spin(name))
         .transpose()
         .map_err(anyhow::Error::msg)?;
+    if let Some(s) = spin.as_mut() {
+        s.degrees_per_second = args.number("--spin-speed", s.degrees_per_second)?;
+        if !s.degrees_per_second.is_finite() || s.degrees_per_second.abs() > 36000.0 {
+            bail!("--spin-speed must be a number of degrees per second, at most 36000");
+        }
+    } else if args.value("--spin-speed").is_some() {
+        bail!("--spin-speed goes with --spin NODE");
+    }
     let time: f32 = args.number("--time", 0.0)?;
     if !time.is_finite() || time < 0.0 {
         bail!("--time {time} must be a finite number of seconds, 0 or more");

@@ -113,10 +113,13 @@ pub fn try_compare(
 
 /// Mean FLIP error between the display images of `a` and `reference` (same size).
 pub fn flip(a: &RadianceImage, reference: &RadianceImage, exposure: f32) -> f64 {
-    let to_flip = |img: &RadianceImage| {
-        let d = display(img, exposure);
-        nv_flip::FlipImageRgb8::with_data(d.width(), d.height(), d.as_raw())
-    };
+    flip_display(&display(a, exposure), &display(reference, exposure))
+}
+
+/// Mean FLIP error between two display images (8-bit sRGB, same size), e.g. PNG files.
+pub fn flip_display(a: &image::RgbImage, reference: &image::RgbImage) -> f64 {
+    let to_flip =
+        |d: &image::RgbImage| nv_flip::FlipImageRgb8::with_data(d.width(), d.height(), d.as_raw());
     let error = nv_flip::flip(
         to_flip(reference),
         to_flip(a),

@@ -74,8 +74,9 @@ const MODES: [Mode; 8] = [
     Mode::VoxelsRadiance,
 ];
 const VOXEL_STEPS: [u32; 5] = [16, 32, 64, 128, 256];
-/// Time per frame with `--frames` (fixed, so runs repeat exactly).
-pub const FIXED_DT: f32 = 1.0 / 60.0;
+/// Frames per second of scene time with `--frames` (a fixed step, so runs repeat exactly).
+pub const FRAMES_PER_SECOND: f32 = 60.0;
+pub const FIXED_DT: f32 = 1.0 / FRAMES_PER_SECOND;
 /// How fast L turns the main light.
 const LIGHT_DEGREES_PER_SECOND: f32 = 45.0;
 
@@ -161,6 +162,8 @@ struct App {
     recreate: bool,
     // Time.
     time: f32,
+    /// Frames the clock advanced (not paused).
+    steps: u32,
     light_angle: f32,
     last_instant: Instant,
     frame: u32,
@@ -229,6 +232,7 @@ pub fn run(opts: ViewOptions) -> Result<ViewReport> {
         rebuild: true,
         recreate: true,
         time: 0.0,
+        steps: 0,
         light_angle: 0.0,
         last_instant: Instant::now(),
         frame: 0,
@@ -580,7 +584,13 @@ impl App {
         };
         self.last_instant = now;
         if !self.paused {
-            self.time += dt;
+            self.steps += 1;
+            // Counted in whole steps with --frames, so that frame N is at exactly N/60 s, as
+            // `voxgi render --time` poses it.
+            self.time = match self.opts.frames {
+                Some(_) => self.steps as f32 / FRAMES_PER_SECOND,
+                None => self.time + dt,
+            };
         }
         self.fly(dt);
         let turn = match (self.held.contains(&KeyCode::KeyL), self.shift) {

@@ -1,0 +1,141 @@
+//! Lights and nodes that move between frames (what the window's keys, animations and spins
+//! do): the next frame must be what a fresh renderer makes of the moved scene, shadow maps
+//! and voxel lighting included, and a frame where nothing moved must equal the one before.
+
+mod gpu;
+use glam::{Mat4, Vec3};
+use gpu::*;
+use voxgi::gi::GiSettings;
+use voxgi::metrics::compare;
+use voxgi::output::RadianceImage;
+use voxgi::render::{Mode, RenderSettings, Renderer};
+use voxgi::scene::{LightKind, Scene};
+
+/// A floor and a wall, a floating square (its own node) casting a shadow, and a spot light.
+fn scene() -> (Scene, usize) {
+    let mut s = empty_scene();
+    let m = lambert(&mut s, Vec3::splat(0.7));
+    floor(&mut s, 2.0, m);
+    quad(
+        &mut s,
+        [
+            Vec3::new(-2.0, 0.0, -2.0),
+            Vec3::new(2.0, 0.0, -2.0),
+            Vec3::new(2.0, 2.0, -2.0),
+            Vec3::new(-2.0, 2.0, -2.0),
+        ],
+        m,
+    );
+    let red = lambert(&mut s, Vec3::new(0.8, 0.1, 0.1));
+    let first = s.instances.len();
+    quad(
+        &mut s,
+        [
+            Vec3::new(-0.4, 0.8, 0.4),
+            Vec3::new(0.4, 0.8, 0.4),
+            Vec3::new(0.4, 0.8, -0.4),
+            Vec3::new(-0.4, 0.8, -0.4),
+        ],
+        red,
+    );
+    // Every quad is its own node; the square's is the one that moves.
+    let node = s.instances[first].node;
+    s.lights.push(light(
+        LightKind::Spot {
+            inner_cone: 0.5,
+            outer_cone: 0.8,
+        },
+        Vec3::splat(40.0),
+        Vec3::new(0.0, 1.9, 0.0),
+        Vec3::NEG_Y,
+    ));
+    look_at(
+        &mut s,
+        Vec3::new(0.0, 2.5, 3.0),
+        Vec3::new(0.0, 0.3, 0.0),
+        60.0,
+    );
+    (s, node)
+}
+
+fn settings(node: usize) -> RenderSettings {
+    RenderSettings {
+        width: 48,
+        height: 48,
+        shadow_resolution: 256,
+        mode: Mode::Full,
+        gi: GiSettings {
+            voxels: 32,
+            ..Default::default()
+        },
+        dynamic_nodes: vec![node],
+        ..Default::default()
+    }
+}
+
+fn image(r: &mut Renderer) -> RadianceImage {
+    r.render(true).unwrap();
+    RadianceImage {
+        width: r.settings.width,
+        height: r.settings.height,
+        pixels: r.radiance(),
+    }
+}
+
+#[test]
+fn moved_lights_and_nodes_render_as_a_fresh_renderer_would() {
+    let (s, node) = scene();
+    let moved_light = {
+        let mut l = s.lights[0].clone();
+        l.position = Vec3::new(1.2, 1.9, 0.3);
+        l.direction = Vec3::new(-0.5, -1.0, -0.2).normalize();
+        l
+    };
+    let moved_node = Mat4::from_translation(Vec3::new(-0.7, 0.3, 0.2));
+
+    let ctx = context();
+    let stats = ctx.stats.clone();
+    let (first, again, moved) = {
+        let mut r = Renderer::new(&ctx, &s, settings(node)).unwrap();
+        let first = image(&mut r);
+        let again = image(&mut r);
+        r.set_lights(std::slice::from_ref(&moved_light)).unwrap();
+        r.set_node_transform(node, moved_node);
+        (first, again, image(&mut r))
+    };
+    // Changing a light's kind is refused, not half done.
+    {
+        let mut r = Renderer::new(&ctx, &s, settings(node)).unwrap();
+        let mut point = moved_light.clone();
+        point.kind = LightKind::Point;
+        assert!(r.set_lights(&[point]).is_err());
+        assert!(r.set_lights(&[]).is_err());
+    }
+    let fresh = {
+        let mut s2 = s.clone();
+        s2.lights[0] = moved_light;
+        for i in s2.instances.iter_mut().filter(|i| i.node == node) {
+            i.world = moved_node;
+        }
+        let mut r = Renderer::new(&ctx, &s2, settings(node)).unwrap();
+        image(&mut r)
+    };
+    drop(ctx);
+    assert_eq!(stats.count(), 0, "{}", stats.messages().join("\n"));
+
+    // Nothing moved: the second frame (shadow maps kept from the first) is the first.
+    assert_eq!(first.pixels, again.pixels, "a still frame changed");
+    // The move is plain to see ...
+    let change = compare(&moved, &first).rel_mse;
+    assert!(
+        change > 0.01,
+        "the moved frame barely differs (relMSE {change})"
+    );
+    // ... and matches a renderer that started with the moved scene.
+    let m = compare(&moved, &fresh);
+    assert!(
+        m.rel_mse < 1e-6,
+        "moved vs fresh: relMSE {} (max of the frames' difference {change})",
+        m.rel_mse
+    );
+}

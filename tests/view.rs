@@ -1,0 +1,374 @@
+//! `voxgi view` in a window under Xvfb (lavapipe presents to X11), with the Khronos validation
+//! layer: scenes that move, windows that resize, keys that change the settings; each
+//! screenshot must show the scene and match `voxgi render` of the same camera and settings.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::Mutex;
+
+/// xvfb-run -a races when two start at once: one window at a time.
+static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
+
+fn voxgi() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_voxgi"))
+}
+
+fn shared(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../shared/scenes/{name}/{name}.gltf"))
+}
+
+fn out_dir(test: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("voxgi-view-{test}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn show(o: &Output) -> String {
+    format!(
+        "status {:?}\nstdout:\n{}\nstderr:\n{}",
+        o.status,
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    )
+}
+
+/// `voxgi view ARGS` in a virtual X screen.
+fn view(args: &[&str]) -> Output {
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    let mut cmd = Command::new("xvfb-run");
+    cmd.args([
+        "-a",
+        "-s",
+        "-screen 0 1024x768x24",
+        env!("CARGO_BIN_EXE_voxgi"),
+        "view",
+    ])
+    .args(args);
+    match cmd.output() {
+        Ok(o) => o,
+        Err(e) => panic!(
+            "cannot run xvfb-run ({e}): the window tests need Xvfb (bash .ci/install-deps \
+             installs it)"
+        ),
+    }
+}
+
+fn render(args: &[&str]) -> Output {
+    voxgi().arg("render").args(args).output().unwrap()
+}
+
+fn png(path: &Path) -> image::RgbImage {
+    image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .to_rgb8()
+}
+
+/// Not blank: the picture has light and structure (not one flat colour).
+fn assert_shows_something(img: &image::RgbImage, what: &str) {
+    let n = (img.width() * img.height() * 3) as f64;
+    let mean = img.as_raw().iter().map(|&v| v as f64).sum::<f64>() / n;
+    let var = img
+        .as_raw()
+        .iter()
+        .map(|&v| (v as f64 - mean).powi(2))
+        .sum::<f64>()
+        / n;
+    assert!(
+        mean > 10.0 && var.sqrt() > 10.0,
+        "{what}: looks blank (mean {mean:.1}, deviation {:.1} of 255)",
+        var.sqrt()
+    );
+}
+
+/// Runs the window and `voxgi render` with the same settings (`common`), the window's
+/// extra arguments `window`, and the render's `still` (the pose of its last frame); returns
+/// the FLIP error between the screenshot and the render.
+fn window_against_render(test: &str, common: &[&str], window: &[&str], still: &[&str]) -> f64 {
+    let dir = out_dir(test);
+    let shot = dir.join("window.png");
+    let still_png = dir.join("render.png");
+    let shot_s = shot.to_str().unwrap();
+    let mut args: Vec<&str> = common.to_vec();
+    args.extend(window);
+    args.extend(["--screenshot", shot_s, "--validate"]);
+    let o = view(&args);
+    assert!(o.status.success(), "voxgi view failed:\n{}", show(&o));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !err.contains("VUID") && !err.to_lowercase().contains("validation"),
+        "validation messages:\n{err}"
+    );
+    let mut args: Vec<&str> = common.to_vec();
+    args.extend(still);
+    args.extend(["--out", still_png.to_str().unwrap(), "--validate"]);
+    let o = render(&args);
+    assert!(o.status.success(), "voxgi render failed:\n{}", show(&o));
+
+    let (a, b) = (png(&shot), png(&still_png));
+    assert_eq!(a.dimensions(), b.dimensions(), "window and render sizes");
+    assert_shows_something(&a, test);
+    let flip = voxgi::metrics::flip_display(&a, &b);
+    eprintln!("{test}: FLIP {flip:.5} between the window and voxgi render");
+    let _ = std::fs::remove_dir_all(&dir);
+    flip
+}
+
+#[test]
+fn cornell_box_original_spins_resizes_and_matches_render() {
+    let scene = shared("CornellBox-Original");
+    let scene = scene.to_str().unwrap();
+    // Its one node (the whole box) turns a full turn over the 60 frames (1 s), voxelized
+    // every frame; the window is resized twice on the way.
+    let common = [
+        scene,
+        "--width",
+        "128",
+        "--height",
+        "128",
+        "--voxels",
+        "32",
+        "--exposure",
+        "3",
+        "--spin",
+        "CornellBox-Original",
+        "--spin-speed",
+        "360",
+    ];
+    let flip = window_against_render(
+        "cornell",
+        &common,
+        &[
+            "--frames",
+            "60",
+            "--resize",
+            "20:96x72",
+            "--resize",
+            "40:128x128",
+        ],
+        &["--time", "1"],
+    );
+    assert!(flip < 0.005, "FLIP {flip}");
+}
+
+fn base64(bytes: &[u8]) -> String {
+    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for c in bytes.chunks(3) {
+        let n = (c[0] as u32) << 16
+            | (*c.get(1).unwrap_or(&0) as u32) << 8
+            | *c.get(2).unwrap_or(&0) as u32;
+        for i in 0..4 {
+            if i <= c.len() {
+                out.push(A[(n >> (18 - 6 * i) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+/// Sponza as it is (its file, buffer and textures read where they lie in ../shared) plus a
+/// red cube 1.5 m wide, node "spinner", standing in the atrium: Sponza is one node, and
+/// turning all of it would voxelize its 262k triangles every frame.
+fn sponza_with_a_spinner(dir: &Path) -> PathBuf {
+    use serde_json::{json, Value};
+    let sponza_dir = shared("Sponza").parent().unwrap().canonicalize().unwrap();
+    let text = std::fs::read_to_string(shared("Sponza")).unwrap();
+    let mut g: Value = serde_json::from_str(&text).unwrap();
+    let absolute = |uri: &Value| {
+        Value::String(
+            sponza_dir
+                .join(uri.as_str().unwrap())
+                .to_str()
+                .unwrap()
+                .into(),
+        )
+    };
+    for b in g["buffers"].as_array_mut().unwrap() {
+        b["uri"] = absolute(&b["uri"]);
+    }
+    for i in g["images"].as_array_mut().unwrap() {
+        i["uri"] = absolute(&i["uri"]);
+    }
+    // A unit cube as 12 triangles, unindexed.
+    let corner = |i: usize| {
+        [
+            (i & 1) as f32 - 0.5,
+            ((i >> 1) & 1) as f32 - 0.5,
+            ((i >> 2) & 1) as f32 - 0.5,
+        ]
+    };
+    let faces = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let mut bytes = Vec::new();
+    for f in faces {
+        for k in [0, 1, 2, 0, 2, 3] {
+            for v in corner(f[k]) {
+                bytes.extend(v.to_le_bytes());
+            }
+        }
+    }
+    let buffers = g["buffers"].as_array().unwrap().len();
+    let views = g["bufferViews"].as_array().unwrap().len();
+    let accessors = g["accessors"].as_array().unwrap().len();
+    let materials = g["materials"].as_array().unwrap().len();
+    let meshes = g["meshes"].as_array().unwrap().len();
+    let nodes = g["nodes"].as_array().unwrap().len();
+    let push = |g: &mut Value, key: &str, v: Value| g[key].as_array_mut().unwrap().push(v);
+    push(
+        &mut g,
+        "buffers",
+        json!({"uri": format!("data:application/octet-stream;base64,{}", base64(&bytes)), "byteLength": bytes.len()}),
+    );
+    push(
+        &mut g,
+        "bufferViews",
+        json!({"buffer": buffers, "byteLength": bytes.len()}),
+    );
+    push(
+        &mut g,
+        "accessors",
+        json!({"bufferView": views, "componentType": 5126, "count": 36, "type": "VEC3", "min": [-0.5, -0.5, -0.5], "max": [0.5, 0.5, 0.5]}),
+    );
+    push(
+        &mut g,
+        "materials",
+        json!({"name": "red", "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.15, 0.1, 1.0], "metallicFactor": 0.0}}),
+    );
+    push(
+        &mut g,
+        "meshes",
+        json!({"name": "cube", "primitives": [{"attributes": {"POSITION": accessors}, "material": materials}]}),
+    );
+    push(
+        &mut g,
+        "nodes",
+        json!({"name": "spinner", "mesh": meshes, "translation": [0.0, 1.5, 0.0], "rotation": [0.0, 0.2588, 0.0, 0.9659], "scale": [1.5, 1.5, 1.5]}),
+    );
+    g["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(json!(nodes));
+    let path = dir.join("sponza-spinner.gltf");
+    std::fs::write(&path, serde_json::to_string(&g).unwrap()).unwrap();
+    path
+}
+
+#[test]
+fn sponza_with_a_spinning_cube_resizes_and_matches_render() {
+    let dir = out_dir("sponza-scene");
+    let scene = sponza_with_a_spinner(&dir);
+    let scene = scene.to_str().unwrap();
+    let common = [
+        scene,
+        "--width",
+        "128",
+        "--height",
+        "96",
+        "--voxels",
+        "32",
+        "--sun",
+        "70,30,6",
+        "--shadow-res",
+        "512",
+        "--spin",
+        "spinner",
+    ];
+    let flip = window_against_render(
+        "sponza",
+        &common,
+        &[
+            "--frames",
+            "60",
+            "--resize",
+            "20:80x64",
+            "--resize",
+            "40:128x96",
+        ],
+        &["--time", "1"],
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+    assert!(flip < 0.005, "FLIP {flip}");
+}
+
+#[test]
+fn keys_change_mode_bounces_and_voxels_as_the_command_line_would() {
+    // The bundled Cornell box: 3 is the indirect mode, B two bounces, Shift+V halves the
+    // voxels (64 -> 32); the tall box turns meanwhile (a quarter turn per second).
+    let common = [
+        "--width",
+        "96",
+        "--height",
+        "96",
+        "--spin",
+        "tall box",
+        "--shadow-res",
+        "256",
+    ];
+    let flip = window_against_render(
+        "keys",
+        &common,
+        &[
+            "--frames",
+            "12",
+            "--press",
+            "2:3",
+            "--press",
+            "4:b",
+            "--press",
+            "6:shift+v",
+        ],
+        &[
+            "--time",
+            "0.2",
+            "--mode",
+            "indirect",
+            "--bounces",
+            "2",
+            "--voxels",
+            "32",
+        ],
+    );
+    assert!(flip < 0.005, "FLIP {flip}");
+}
+
+#[test]
+fn bad_view_arguments_fail_clearly_before_opening_a_window() {
+    for (args, want) in [
+        (vec!["--screenshot", "x.jpg", "--frames", "1"], "x.jpg"),
+        (vec!["--screenshot", "x.png"], "--frames"),
+        (vec!["--frames", "0"], "--frames"),
+        (vec!["--resize", "5:0x3"], "--resize"),
+        (vec!["--press", "5:ctrl"], "--press"),
+        (vec!["--spin", "no such node"], "no such node"),
+        (vec!["--spin-speed", "10"], "--spin"),
+    ] {
+        let o = voxgi()
+            .arg("view")
+            .args(&args)
+            .env_remove("DISPLAY")
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert!(err.contains(want), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+    // Without a display the error says what to do.
+    let o = voxgi()
+        .args(["view", "--frames", "1"])
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success());
+    assert!(err.contains("xvfb-run"), "{err}");
+}
