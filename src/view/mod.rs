@@ -944,6 +944,16 @@ mod tests {
     }
 
     #[test]
+    fn the_readme_lists_every_control() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md");
+        let readme = std::fs::read_to_string(path).unwrap();
+        for (keys, what) in CONTROLS {
+            let row = format!("| `{keys}` | {what} |");
+            assert!(readme.contains(&row), "README.md lacks the row {row}");
+        }
+    }
+
+    #[test]
     fn the_main_light_turns_about_the_scene_centre() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/cornell-box.gltf");
         let mut scene = crate::scene::load(&path).unwrap();
