@@ -139,3 +139,35 @@ fn moved_lights_and_nodes_render_as_a_fresh_renderer_would() {
         m.rel_mse
     );
 }
+
+#[test]
+fn a_resized_renderer_keeps_its_voxels_and_matches_a_fresh_one() {
+    let (s, node) = scene();
+    let sized = |w: u32, h: u32| RenderSettings {
+        width: w,
+        height: h,
+        ..settings(node)
+    };
+    let ctx = context();
+    let stats = ctx.stats.clone();
+    let (first, small, back) = {
+        let mut r = Renderer::new(&ctx, &s, sized(48, 48)).unwrap();
+        let first = image(&mut r);
+        r.resize(40, 24).unwrap();
+        let small = image(&mut r);
+        r.resize(48, 48).unwrap();
+        (first, small, image(&mut r))
+    };
+    let fresh_small = {
+        let mut r = Renderer::new(&ctx, &s, sized(40, 24)).unwrap();
+        image(&mut r)
+    };
+    drop(ctx);
+    assert_eq!(stats.count(), 0, "{}", stats.messages().join("\n"));
+    assert_eq!((small.width, small.height), (40, 24));
+    assert_eq!(
+        small.pixels, fresh_small.pixels,
+        "resized frame differs from a fresh one"
+    );
+    assert_eq!(back.pixels, first.pixels, "resizing back changed the frame");
+}

@@ -140,6 +140,59 @@ struct DrawPush {
     extra: u32,
 }
 
+/// The images whose size is the frame's: G-buffer, depth, radiance, and its readback.
+fn frame_images(
+    ctx: &Arc<Context>,
+    w: u32,
+    h: u32,
+) -> VkResult<(Vec<Image>, Image, Image, Buffer)> {
+    let gbuffer = GBUFFER_FORMATS
+        .iter()
+        .zip(GBUFFER_NAMES)
+        .map(|(&f, name)| {
+            Image::new(
+                ctx,
+                name,
+                ImageDesc::d2(
+                    f,
+                    w,
+                    h,
+                    vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
+                ),
+            )
+        })
+        .collect::<VkResult<Vec<_>>>()?;
+    let depth = Image::new(
+        ctx,
+        "gbuffer depth",
+        ImageDesc::d2(
+            DEPTH_FORMAT,
+            w,
+            h,
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
+        ),
+    )?;
+    // Array views even for one layer, as the shader samples a 2D array.
+    let hdr = Image::new(
+        ctx,
+        "radiance",
+        ImageDesc::d2(
+            vk::Format::R32G32B32A32_SFLOAT,
+            w,
+            h,
+            vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+        ),
+    )?;
+    let readback = Buffer::new(
+        ctx,
+        "radiance readback",
+        (w * h * 16) as u64,
+        vk::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuToCpu,
+    )?;
+    Ok((gbuffer, depth, hdr, readback))
+}
+
 /// Renders a scene; owns every GPU object it uses (freed in Drop, the context last).
 pub struct Renderer {
     pub settings: RenderSettings,
@@ -163,7 +216,7 @@ pub struct Renderer {
     _pool: DescriptorPool,
     scene_set: vk::DescriptorSet,
     lighting_set: vk::DescriptorSet,
-    _nearest: Sampler,
+    nearest: Sampler,
     _shadow_sampler: Sampler,
     gpu: GpuScene,
     states: ResourceStates,
@@ -208,32 +261,6 @@ impl Renderer {
             vk::BufferUsageFlags::UNIFORM_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;
-        let gbuffer = GBUFFER_FORMATS
-            .iter()
-            .zip(GBUFFER_NAMES)
-            .map(|(&f, name)| {
-                Image::new(
-                    ctx,
-                    name,
-                    ImageDesc::d2(
-                        f,
-                        w,
-                        h,
-                        vk::ImageUsageFlags::COLOR_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
-                    ),
-                )
-            })
-            .collect::<VkResult<Vec<_>>>()?;
-        let depth = Image::new(
-            ctx,
-            "gbuffer depth",
-            ImageDesc::d2(
-                DEPTH_FORMAT,
-                w,
-                h,
-                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
-            ),
-        )?;
         // Only the views the lights need; a 1x1 stand-in when nothing casts shadows.
         let shadow_res = if gpu.shadow_view_count > 0 {
             settings.shadow_resolution
@@ -251,24 +278,7 @@ impl Renderer {
             )
             .layers(gpu.shadow_view_count.max(1)),
         )?;
-        // Array views even for one layer, as the shader samples a 2D array.
-        let hdr = Image::new(
-            ctx,
-            "radiance",
-            ImageDesc::d2(
-                vk::Format::R32G32B32A32_SFLOAT,
-                w,
-                h,
-                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
-            ),
-        )?;
-        let readback = Buffer::new(
-            ctx,
-            "radiance readback",
-            (w * h * 16) as u64,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
+        let (gbuffer, depth, hdr, readback) = frame_images(ctx, w, h)?;
 
         let all = vk::ShaderStageFlags::VERTEX
             | vk::ShaderStageFlags::GEOMETRY
@@ -587,7 +597,7 @@ impl Renderer {
             _pool: pool,
             scene_set,
             lighting_set,
-            _nearest: nearest,
+            nearest,
             _shadow_sampler: shadow_sampler,
             gpu,
             states,
@@ -983,6 +993,61 @@ impl Renderer {
         if let (true, Some(gi)) = (moved_static, self.gi.as_mut()) {
             gi.static_dirty = true;
         }
+    }
+
+    /// A new frame size: the G-buffer, radiance and readback images are made again at the
+    /// new size; the scene, the shadow maps and the voxels stay (no voxelization again).
+    pub fn resize(&mut self, width: u32, height: u32) -> VkResult<()> {
+        if (width, height) == (self.settings.width, self.settings.height) {
+            return Ok(());
+        }
+        let (gbuffer, depth, hdr, readback) = frame_images(&self.ctx, width, height)?;
+        let gb_infos: Vec<[vk::DescriptorImageInfo; 1]> = gbuffer
+            .iter()
+            .map(|img| {
+                [vk::DescriptorImageInfo {
+                    sampler: self.nearest.raw,
+                    image_view: img.view,
+                    image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+                }]
+            })
+            .collect();
+        let hdr_info = [vk::DescriptorImageInfo {
+            sampler: vk::Sampler::null(),
+            image_view: hdr.view,
+            image_layout: vk::ImageLayout::GENERAL,
+        }];
+        let write = |binding: u32, ty| {
+            vk::WriteDescriptorSet::default()
+                .dst_set(self.lighting_set)
+                .dst_binding(binding)
+                .descriptor_type(ty)
+        };
+        let mut writes: Vec<_> = gb_infos
+            .iter()
+            .enumerate()
+            .map(|(i, info)| {
+                write(i as u32, vk::DescriptorType::COMBINED_IMAGE_SAMPLER).image_info(info)
+            })
+            .collect();
+        writes.push(write(6, vk::DescriptorType::STORAGE_IMAGE).image_info(&hdr_info));
+        // Every frame before was waited for: the sets are not in use.
+        unsafe { self.ctx.device.update_descriptor_sets(&writes, &[]) };
+        if let Some(gi) = &self.gi {
+            let views: Vec<_> = gbuffer.iter().map(|i| (i.view, self.nearest.raw)).collect();
+            gi.trace.retarget(&self.ctx, &views, &hdr);
+        }
+        for img in self.gbuffer.iter().chain([&self.depth, &self.hdr]) {
+            self.states.forget(img.raw);
+        }
+        self.states.forget(self.readback.raw);
+        self.gbuffer = gbuffer;
+        self.depth = depth;
+        self.hdr = hdr;
+        self.readback = readback;
+        self.settings.width = width;
+        self.settings.height = height;
+        Ok(())
     }
 
     /// Moves or changes the lights (one per scene light, each of its kind as loaded, so the

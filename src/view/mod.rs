@@ -547,7 +547,15 @@ impl App {
             .live
             .as_ref()
             .is_some_and(|l| l.renderer.settings.width == w && l.renderer.settings.height == h);
-        if self.rebuild || !live_fits {
+        if !self.rebuild && !live_fits {
+            if let Some(live) = win.live.as_mut() {
+                // Same settings, new size: the renderer keeps its voxels and shadow maps.
+                live.renderer.resize(w, h)?;
+                live.display = Display::new(&self.ctx, live.renderer.radiance_image())?;
+                return Ok(true);
+            }
+        }
+        if self.rebuild || win.live.is_none() {
             win.live = None;
             let settings = self.settings(w, h);
             let renderer = match Renderer::new(&self.ctx, &self.opts.scene, settings) {
