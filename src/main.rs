@@ -517,6 +517,17 @@ fn info(args: &Args) -> Result<()> {
             l.direction.to_array()
         );
     }
+    if !scene.animations.is_empty() {
+        println!("animations {}", scene.animations.len());
+        for a in &scene.animations {
+            println!(
+                "  {:?}: {} channel(s), {:.2} s",
+                a.name.as_deref().unwrap_or("-"),
+                a.channels.len(),
+                a.duration()
+            );
+        }
+    }
     if scene.bounds.is_empty() {
         println!("bounds     empty");
     } else {

@@ -6,6 +6,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::Mutex;
 
+mod common;
+
 /// xvfb-run -a races when two start at once: one window at a time.
 static ONE_AT_A_TIME: Mutex<()> = Mutex::new(());
 
@@ -82,8 +84,13 @@ fn assert_shows_something(img: &image::RgbImage, what: &str) {
 
 /// Runs the window and `voxgi render` with the same settings (`common`), the window's
 /// extra arguments `window`, and the render's `still` (the pose of its last frame); returns
-/// the FLIP error between the screenshot and the render.
-fn window_against_render(test: &str, common: &[&str], window: &[&str], still: &[&str]) -> f64 {
+/// the FLIP error between the screenshot and the render, and the screenshot.
+fn window_against_render(
+    test: &str,
+    common: &[&str],
+    window: &[&str],
+    still: &[&str],
+) -> (f64, image::RgbImage) {
     let dir = out_dir(test);
     let shot = dir.join("window.png");
     let still_png = dir.join("render.png");
@@ -106,11 +113,10 @@ fn window_against_render(test: &str, common: &[&str], window: &[&str], still: &[
 
     let (a, b) = (png(&shot), png(&still_png));
     assert_eq!(a.dimensions(), b.dimensions(), "window and render sizes");
-    assert_shows_something(&a, test);
     let flip = voxgi::metrics::flip_display(&a, &b);
     eprintln!("{test}: FLIP {flip:.5} between the window and voxgi render");
     let _ = std::fs::remove_dir_all(&dir);
-    flip
+    (flip, a)
 }
 
 #[test]
@@ -134,7 +140,7 @@ fn cornell_box_original_spins_resizes_and_matches_render() {
         "--spin-speed",
         "360",
     ];
-    let flip = window_against_render(
+    let (flip, shot) = window_against_render(
         "cornell",
         &common,
         &[
@@ -147,6 +153,7 @@ fn cornell_box_original_spins_resizes_and_matches_render() {
         ],
         &["--time", "1"],
     );
+    assert_shows_something(&shot, "screenshot");
     assert!(flip < 0.005, "FLIP {flip}");
 }
 
@@ -281,7 +288,7 @@ fn sponza_with_a_spinning_cube_resizes_and_matches_render() {
         "--spin",
         "spinner",
     ];
-    let flip = window_against_render(
+    let (flip, shot) = window_against_render(
         "sponza",
         &common,
         &[
@@ -295,6 +302,7 @@ fn sponza_with_a_spinning_cube_resizes_and_matches_render() {
         &["--time", "1"],
     );
     let _ = std::fs::remove_dir_all(&dir);
+    assert_shows_something(&shot, "screenshot");
     assert!(flip < 0.005, "FLIP {flip}");
 }
 
@@ -312,7 +320,7 @@ fn keys_change_mode_bounces_and_voxels_as_the_command_line_would() {
         "--shadow-res",
         "256",
     ];
-    let flip = window_against_render(
+    let (flip, shot) = window_against_render(
         "keys",
         &common,
         &[
@@ -336,7 +344,48 @@ fn keys_change_mode_bounces_and_voxels_as_the_command_line_would() {
             "32",
         ],
     );
+    assert_shows_something(&shot, "screenshot");
     assert!(flip < 0.005, "FLIP {flip}");
+}
+
+#[test]
+fn animations_play_in_the_window_as_render_poses_them() {
+    // tests/common's animated scene: a parent node sliding 0 -> (2,0,0) -> (2,1,0) over 2 s,
+    // its child triangle turning a quarter turn; under a sun, seen from the default camera.
+    let dir = common::temp_dir("view-anim");
+    let scene = common::animated_scene(&dir);
+    let scene = scene.to_str().unwrap();
+    let common = [
+        scene,
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--voxels",
+        "16",
+        "--sun",
+        "60,20,6",
+        "--shadow-res",
+        "128",
+    ];
+    let mut shots = Vec::new();
+    for (frames, time) in [("30", "0.5"), ("90", "1.5")] {
+        let (flip, shot) =
+            window_against_render("anim", &common, &["--frames", frames], &["--time", time]);
+        assert!(flip < 0.005, "{frames} frames: FLIP {flip}");
+        shots.push(shot);
+    }
+    // The animation moved something between 0.5 s and 1.5 s.
+    let changed = shots[0]
+        .as_raw()
+        .iter()
+        .zip(shots[1].as_raw())
+        .filter(|(a, b)| a.abs_diff(**b) > 8)
+        .count();
+    assert!(
+        changed > 20,
+        "only {changed} channels changed between 0.5 s and 1.5 s"
+    );
 }
 
 #[test]
