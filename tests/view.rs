@@ -84,13 +84,14 @@ fn assert_shows_something(img: &image::RgbImage, what: &str) {
 
 /// Runs the window and `voxgi render` with the same settings (`common`), the window's
 /// extra arguments `window`, and the render's `still` (the pose of its last frame); returns
-/// the FLIP error between the screenshot and the render, and the screenshot.
+/// the FLIP error between the screenshot and the render, the screenshot, and what the
+/// window printed.
 fn window_against_render(
     test: &str,
     common: &[&str],
     window: &[&str],
     still: &[&str],
-) -> (f64, image::RgbImage) {
+) -> (f64, image::RgbImage, String) {
     let dir = out_dir(test);
     let shot = dir.join("window.png");
     let still_png = dir.join("render.png");
@@ -100,6 +101,7 @@ fn window_against_render(
     args.extend(["--screenshot", shot_s, "--validate"]);
     let o = view(&args);
     assert!(o.status.success(), "voxgi view failed:\n{}", show(&o));
+    let printed = String::from_utf8_lossy(&o.stdout).into_owned();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(
         !err.contains("VUID") && !err.to_lowercase().contains("validation"),
@@ -116,7 +118,7 @@ fn window_against_render(
     let flip = voxgi::metrics::flip_display(&a, &b);
     eprintln!("{test}: FLIP {flip:.5} between the window and voxgi render");
     let _ = std::fs::remove_dir_all(&dir);
-    (flip, a)
+    (flip, a, printed)
 }
 
 #[test]
@@ -140,7 +142,7 @@ fn cornell_box_original_spins_resizes_and_matches_render() {
         "--spin-speed",
         "360",
     ];
-    let (flip, shot) = window_against_render(
+    let (flip, shot, _) = window_against_render(
         "cornell",
         &common,
         &[
@@ -288,7 +290,7 @@ fn sponza_with_a_spinning_cube_resizes_and_matches_render() {
         "--spin",
         "spinner",
     ];
-    let (flip, shot) = window_against_render(
+    let (flip, shot, _) = window_against_render(
         "sponza",
         &common,
         &[
@@ -320,10 +322,11 @@ fn keys_change_mode_bounces_and_voxels_as_the_command_line_would() {
         "--shadow-res",
         "256",
     ];
-    let (flip, shot) = window_against_render(
+    let (flip, shot, printed) = window_against_render(
         "keys",
         &common,
         &[
+            "--timings",
             "--frames",
             "12",
             "--press",
@@ -346,6 +349,23 @@ fn keys_change_mode_bounces_and_voxels_as_the_command_line_would() {
     );
     assert_shows_something(&shot, "screenshot");
     assert!(flip < 0.005, "FLIP {flip}");
+    // The title bar showed the settings the keys chose and each pass's time, and --timings
+    // printed the medians.
+    let title = printed
+        .lines()
+        .find(|l| l.starts_with("title: "))
+        .unwrap_or_else(|| panic!("no title printed:\n{printed}"));
+    for want in [
+        "indirect",
+        "2 bounces",
+        "32^3",
+        "ms",
+        "trace ",
+        "voxelize dynamic ",
+    ] {
+        assert!(title.contains(want), "title lacks {want:?}: {title}");
+    }
+    assert!(printed.contains("pass timings, median over"), "{printed}");
 }
 
 #[test]
@@ -370,7 +390,7 @@ fn animations_play_in_the_window_as_render_poses_them() {
     ];
     let mut shots = Vec::new();
     for (frames, time) in [("30", "0.5"), ("90", "1.5")] {
-        let (flip, shot) =
+        let (flip, shot, _) =
             window_against_render("anim", &common, &["--frames", frames], &["--time", time]);
         assert!(flip < 0.005, "{frames} frames: FLIP {flip}");
         shots.push(shot);

@@ -180,6 +180,8 @@ struct App {
     /// window is not ready).
     pressed_at: Option<u32>,
     title_at: Instant,
+    /// The window's title as last set.
+    title: String,
     error: Option<anyhow::Error>,
 }
 
@@ -245,6 +247,7 @@ pub fn run(opts: ViewOptions) -> Result<ViewReport> {
         scripted_held: Vec::new(),
         pressed_at: None,
         title_at: Instant::now(),
+        title: String::new(),
         error: None,
         win: None,
         opts,
@@ -269,6 +272,10 @@ pub fn run(opts: ViewOptions) -> Result<ViewReport> {
         if let Some(live) = app.win.as_ref().and_then(|w| w.live.as_ref()) {
             print_timings(&live.renderer);
         }
+    }
+    if app.opts.frames.is_some() {
+        // What the title bar said last (scripted runs have no one to read it).
+        println!("title: {}", app.title);
     }
     let frames = app.frame;
     let error = app.error.take();
@@ -397,6 +404,7 @@ impl App {
             }
         }
         win.window.set_title(&title);
+        self.title = title;
     }
 
     fn key(&mut self, code: KeyCode, pressed: bool, repeat: bool, el: &ActiveEventLoop) {
