@@ -377,6 +377,9 @@ fn view(args: &Args) -> Result<()> {
         scene.lights.push(parse_sun(spec)?);
     }
     let (motion, _) = motion(args, &scene)?;
+    if args.value("--time").is_some() {
+        bail!("--time goes with render (the window's scene time runs from 0)");
+    }
     let validating = args.flag("--validate");
     let report = voxgi::view::run(voxgi::view::ViewOptions {
         scene,

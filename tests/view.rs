@@ -418,6 +418,7 @@ fn bad_view_arguments_fail_clearly_before_opening_a_window() {
         (vec!["--press", "5:ctrl"], "--press"),
         (vec!["--spin", "no such node"], "no such node"),
         (vec!["--spin-speed", "10"], "--spin"),
+        (vec!["--time", "1"], "--time"),
     ] {
         let o = voxgi()
             .arg("view")

@@ -172,7 +172,6 @@ fn frame_images(
             vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
         ),
     )?;
-    // Array views even for one layer, as the shader samples a 2D array.
     let hdr = Image::new(
         ctx,
         "radiance",
@@ -261,7 +260,8 @@ impl Renderer {
             vk::BufferUsageFlags::UNIFORM_BUFFER,
             MemoryLocation::CpuToGpu,
         )?;
-        // Only the views the lights need; a 1x1 stand-in when nothing casts shadows.
+        // Only the views the lights need; a 1x1 stand-in when nothing casts shadows. Array
+        // views even for one layer, as the shader samples a 2D array.
         let shadow_res = if gpu.shadow_view_count > 0 {
             settings.shadow_resolution
         } else {
