@@ -86,43 +86,14 @@ impl Trace {
     /// Points the passes at new G-buffer and output images (a resized frame). The sets must
     /// not be in use (the frames before have been waited for).
     pub fn retarget(&self, ctx: &Context, gbuffer: &[(vk::ImageView, vk::Sampler)], out: &Image) {
-        let sampled: Vec<[vk::DescriptorImageInfo; 1]> = gbuffer
-            .iter()
-            .map(|&(view, sampler)| {
-                [vk::DescriptorImageInfo {
-                    sampler,
-                    image_view: view,
-                    image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                }]
-            })
-            .collect();
-        let storage = [vk::DescriptorImageInfo {
-            sampler: vk::Sampler::null(),
-            image_view: out.view,
-            image_layout: vk::ImageLayout::GENERAL,
-        }];
-        let write = |set: vk::DescriptorSet, binding: u32, ty| {
-            vk::WriteDescriptorSet::default()
-                .dst_set(set)
-                .dst_binding(binding)
-                .descriptor_type(ty)
-        };
-        let mut writes: Vec<_> = sampled
+        let mut descs: Vec<(u32, Desc)> = gbuffer
             .iter()
             .enumerate()
-            .map(|(i, info)| {
-                write(
-                    self.trace_set.raw,
-                    i as u32,
-                    vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                )
-                .image_info(info)
-            })
+            .map(|(i, &(v, s))| (i as u32, Desc::Sampled(v, s)))
             .collect();
-        for set in [self.trace_set.raw, self.view_set.raw] {
-            writes.push(write(set, 5, vk::DescriptorType::STORAGE_IMAGE).image_info(&storage));
-        }
-        unsafe { ctx.device.update_descriptor_sets(&writes, &[]) };
+        descs.push((5, Desc::StorageImage(out.view)));
+        pipelines::write_set(ctx, self.trace_set.raw, &descs);
+        pipelines::write_set(ctx, self.view_set.raw, &[(5, Desc::StorageImage(out.view))]);
     }
 
     #[allow(clippy::too_many_arguments)]

@@ -138,65 +138,70 @@ pub struct Set {
     pub raw: vk::DescriptorSet,
 }
 
+impl Desc<'_> {
+    fn ty(&self) -> vk::DescriptorType {
+        match self {
+            Desc::Uniform(_) => vk::DescriptorType::UNIFORM_BUFFER,
+            Desc::Storage(_) => vk::DescriptorType::STORAGE_BUFFER,
+            Desc::Sampled(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
+            Desc::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
+        }
+    }
+}
+
+/// Writes descriptors into `set` (which no submitted work may be using).
+pub fn write_set(ctx: &Context, set: vk::DescriptorSet, descs: &[(u32, Desc)]) {
+    let buffers: Vec<[vk::DescriptorBufferInfo; 1]> = descs
+        .iter()
+        .map(|(_, d)| match d {
+            Desc::Uniform(b) | Desc::Storage(b) => [vk::DescriptorBufferInfo {
+                buffer: b.raw,
+                offset: 0,
+                range: vk::WHOLE_SIZE,
+            }],
+            _ => [vk::DescriptorBufferInfo::default()],
+        })
+        .collect();
+    let images: Vec<[vk::DescriptorImageInfo; 1]> = descs
+        .iter()
+        .map(|(_, d)| match d {
+            Desc::Sampled(view, sampler) => [vk::DescriptorImageInfo {
+                sampler: *sampler,
+                image_view: *view,
+                image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
+            }],
+            Desc::StorageImage(view) => [vk::DescriptorImageInfo {
+                sampler: vk::Sampler::null(),
+                image_view: *view,
+                image_layout: vk::ImageLayout::GENERAL,
+            }],
+            _ => [vk::DescriptorImageInfo::default()],
+        })
+        .collect();
+    let writes: Vec<_> = descs
+        .iter()
+        .enumerate()
+        .map(|(i, (b, d))| {
+            let w = vk::WriteDescriptorSet::default()
+                .dst_set(set)
+                .dst_binding(*b)
+                .descriptor_type(d.ty());
+            match d {
+                Desc::Uniform(_) | Desc::Storage(_) => w.buffer_info(&buffers[i]),
+                _ => w.image_info(&images[i]),
+            }
+        })
+        .collect();
+    unsafe { ctx.device.update_descriptor_sets(&writes, &[]) };
+}
+
 impl DescriptorPool {
     /// Makes a layout from the descriptors' kinds, allocates a set and writes it.
     pub fn set(&self, stages: vk::ShaderStageFlags, descs: &[(u32, Desc)]) -> VkResult<Set> {
-        let bindings: Vec<_> = descs
-            .iter()
-            .map(|(b, d)| {
-                let ty = match d {
-                    Desc::Uniform(_) => vk::DescriptorType::UNIFORM_BUFFER,
-                    Desc::Storage(_) => vk::DescriptorType::STORAGE_BUFFER,
-                    Desc::Sampled(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                    Desc::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
-                };
-                (*b, ty, 1, stages)
-            })
-            .collect();
+        let bindings: Vec<_> = descs.iter().map(|(b, d)| (*b, d.ty(), 1, stages)).collect();
         let layout = SetLayout::new(&self.ctx, &bindings)?;
         let raw = self.allocate(&layout)?;
-        let buffers: Vec<[vk::DescriptorBufferInfo; 1]> = descs
-            .iter()
-            .map(|(_, d)| match d {
-                Desc::Uniform(b) | Desc::Storage(b) => [vk::DescriptorBufferInfo {
-                    buffer: b.raw,
-                    offset: 0,
-                    range: vk::WHOLE_SIZE,
-                }],
-                _ => [vk::DescriptorBufferInfo::default()],
-            })
-            .collect();
-        let images: Vec<[vk::DescriptorImageInfo; 1]> = descs
-            .iter()
-            .map(|(_, d)| match d {
-                Desc::Sampled(view, sampler) => [vk::DescriptorImageInfo {
-                    sampler: *sampler,
-                    image_view: *view,
-                    image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                }],
-                Desc::StorageImage(view) => [vk::DescriptorImageInfo {
-                    sampler: vk::Sampler::null(),
-                    image_view: *view,
-                    image_layout: vk::ImageLayout::GENERAL,
-                }],
-                _ => [vk::DescriptorImageInfo::default()],
-            })
-            .collect();
-        let writes: Vec<_> = descs
-            .iter()
-            .enumerate()
-            .map(|(i, (b, d))| {
-                let w = vk::WriteDescriptorSet::default()
-                    .dst_set(raw)
-                    .dst_binding(*b)
-                    .descriptor_type(bindings[i].1);
-                match d {
-                    Desc::Uniform(_) | Desc::Storage(_) => w.buffer_info(&buffers[i]),
-                    _ => w.image_info(&images[i]),
-                }
-            })
-            .collect();
-        unsafe { self.ctx.device.update_descriptor_sets(&writes, &[]) };
+        write_set(&self.ctx, raw, descs);
         Ok(Set { layout, raw })
     }
 }

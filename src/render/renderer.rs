@@ -1,6 +1,6 @@
 use super::gpu::{as_bytes, FrameUniforms};
 use super::gpu_scene::GpuScene;
-use super::pipelines::{self, DescriptorPool, GraphicsDesc, Pipeline, SetLayout, Spec};
+use super::pipelines::{self, Desc, DescriptorPool, GraphicsDesc, Pipeline, SetLayout, Spec};
 use crate::gi::{Gi, GiInputs, GiSettings, TraceMode};
 use crate::scene::{Camera, Material, Scene, TexRef};
 use crate::vk::{
@@ -1002,37 +1002,14 @@ impl Renderer {
             return Ok(());
         }
         let (gbuffer, depth, hdr, readback) = frame_images(&self.ctx, width, height)?;
-        let gb_infos: Vec<[vk::DescriptorImageInfo; 1]> = gbuffer
-            .iter()
-            .map(|img| {
-                [vk::DescriptorImageInfo {
-                    sampler: self.nearest.raw,
-                    image_view: img.view,
-                    image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-                }]
-            })
-            .collect();
-        let hdr_info = [vk::DescriptorImageInfo {
-            sampler: vk::Sampler::null(),
-            image_view: hdr.view,
-            image_layout: vk::ImageLayout::GENERAL,
-        }];
-        let write = |binding: u32, ty| {
-            vk::WriteDescriptorSet::default()
-                .dst_set(self.lighting_set)
-                .dst_binding(binding)
-                .descriptor_type(ty)
-        };
-        let mut writes: Vec<_> = gb_infos
+        let mut descs: Vec<(u32, Desc)> = gbuffer
             .iter()
             .enumerate()
-            .map(|(i, info)| {
-                write(i as u32, vk::DescriptorType::COMBINED_IMAGE_SAMPLER).image_info(info)
-            })
+            .map(|(i, img)| (i as u32, Desc::Sampled(img.view, self.nearest.raw)))
             .collect();
-        writes.push(write(6, vk::DescriptorType::STORAGE_IMAGE).image_info(&hdr_info));
+        descs.push((6, Desc::StorageImage(hdr.view)));
         // Every frame before was waited for: the sets are not in use.
-        unsafe { self.ctx.device.update_descriptor_sets(&writes, &[]) };
+        pipelines::write_set(&self.ctx, self.lighting_set, &descs);
         if let Some(gi) = &self.gi {
             let views: Vec<_> = gbuffer.iter().map(|i| (i.view, self.nearest.raw)).collect();
             gi.trace.retarget(&self.ctx, &views, &hdr);

@@ -73,6 +73,46 @@ const MODES: [Mode; 8] = [
     Mode::VoxelsEmission,
     Mode::VoxelsRadiance,
 ];
+const LETTERS: [KeyCode; 26] = [
+    KeyCode::KeyA,
+    KeyCode::KeyB,
+    KeyCode::KeyC,
+    KeyCode::KeyD,
+    KeyCode::KeyE,
+    KeyCode::KeyF,
+    KeyCode::KeyG,
+    KeyCode::KeyH,
+    KeyCode::KeyI,
+    KeyCode::KeyJ,
+    KeyCode::KeyK,
+    KeyCode::KeyL,
+    KeyCode::KeyM,
+    KeyCode::KeyN,
+    KeyCode::KeyO,
+    KeyCode::KeyP,
+    KeyCode::KeyQ,
+    KeyCode::KeyR,
+    KeyCode::KeyS,
+    KeyCode::KeyT,
+    KeyCode::KeyU,
+    KeyCode::KeyV,
+    KeyCode::KeyW,
+    KeyCode::KeyX,
+    KeyCode::KeyY,
+    KeyCode::KeyZ,
+];
+const DIGITS: [KeyCode; 10] = [
+    KeyCode::Digit0,
+    KeyCode::Digit1,
+    KeyCode::Digit2,
+    KeyCode::Digit3,
+    KeyCode::Digit4,
+    KeyCode::Digit5,
+    KeyCode::Digit6,
+    KeyCode::Digit7,
+    KeyCode::Digit8,
+    KeyCode::Digit9,
+];
 const VOXEL_STEPS: [u32; 5] = [16, 32, 64, 128, 256];
 /// Frames per second of scene time with `--frames` (a fixed step, so runs repeat exactly).
 pub const FRAMES_PER_SECOND: f32 = 60.0;
@@ -420,27 +460,8 @@ impl App {
         match code {
             KeyCode::Escape => el.exit(),
             KeyCode::KeyR => self.camera.reset(),
-            KeyCode::Digit1
-            | KeyCode::Digit2
-            | KeyCode::Digit3
-            | KeyCode::Digit4
-            | KeyCode::Digit5
-            | KeyCode::Digit6
-            | KeyCode::Digit7
-            | KeyCode::Digit8 => {
-                let i = [
-                    KeyCode::Digit1,
-                    KeyCode::Digit2,
-                    KeyCode::Digit3,
-                    KeyCode::Digit4,
-                    KeyCode::Digit5,
-                    KeyCode::Digit6,
-                    KeyCode::Digit7,
-                    KeyCode::Digit8,
-                ]
-                .iter()
-                .position(|&k| k == code)
-                .unwrap_or(0);
+            _ if DIGITS[1..=MODES.len()].contains(&code) => {
+                let i = DIGITS[1..].iter().position(|&k| k == code).unwrap_or(0);
                 self.mode = MODES[i];
                 self.gi_on = true;
                 self.rebuild = true;
@@ -885,46 +906,6 @@ pub fn parse_press(spec: &str) -> Result<(u32, KeyCode, bool)> {
         "=" => KeyCode::Equal,
         k if k.len() == 1 => {
             let c = k.chars().next().unwrap_or(' ');
-            const LETTERS: [KeyCode; 26] = [
-                KeyCode::KeyA,
-                KeyCode::KeyB,
-                KeyCode::KeyC,
-                KeyCode::KeyD,
-                KeyCode::KeyE,
-                KeyCode::KeyF,
-                KeyCode::KeyG,
-                KeyCode::KeyH,
-                KeyCode::KeyI,
-                KeyCode::KeyJ,
-                KeyCode::KeyK,
-                KeyCode::KeyL,
-                KeyCode::KeyM,
-                KeyCode::KeyN,
-                KeyCode::KeyO,
-                KeyCode::KeyP,
-                KeyCode::KeyQ,
-                KeyCode::KeyR,
-                KeyCode::KeyS,
-                KeyCode::KeyT,
-                KeyCode::KeyU,
-                KeyCode::KeyV,
-                KeyCode::KeyW,
-                KeyCode::KeyX,
-                KeyCode::KeyY,
-                KeyCode::KeyZ,
-            ];
-            const DIGITS: [KeyCode; 10] = [
-                KeyCode::Digit0,
-                KeyCode::Digit1,
-                KeyCode::Digit2,
-                KeyCode::Digit3,
-                KeyCode::Digit4,
-                KeyCode::Digit5,
-                KeyCode::Digit6,
-                KeyCode::Digit7,
-                KeyCode::Digit8,
-                KeyCode::Digit9,
-            ];
             match c {
                 'a'..='z' => LETTERS[(c as u8 - b'a') as usize],
                 '0'..='9' => DIGITS[(c as u8 - b'0') as usize],

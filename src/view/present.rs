@@ -152,114 +152,79 @@ impl Display {
             base_array_layer: 0,
             layer_count: 1,
         };
-        // The swapchain image is not one of the graph's resources: its barriers are written
-        // here. The frame's submission waits for the acquire at the transfer stage, so the
-        // transition out of UNDEFINED follows the acquire.
-        let barrier = |cmd,
-                       src: (vk::PipelineStageFlags2, vk::AccessFlags2),
-                       dst: (vk::PipelineStageFlags2, vk::AccessFlags2),
-                       old,
-                       new| {
-            let b = [vk::ImageMemoryBarrier2::default()
-                .src_stage_mask(src.0)
-                .src_access_mask(src.1)
-                .dst_stage_mask(dst.0)
-                .dst_access_mask(dst.1)
-                .old_layout(old)
-                .new_layout(new)
-                .image(target.image)
-                .subresource_range(color)];
-            unsafe {
-                d.cmd_pipeline_barrier2(
-                    cmd,
-                    &vk::DependencyInfo::default().image_memory_barriers(&b),
-                )
-            };
+        let layers = vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
         };
-        let transfer = vk::PipelineStageFlags2::TRANSFER;
-        let mut pass = g.pass("present").image(&self.image, Access::TransferRead);
-        if let Some(b) = shot {
-            pass = pass.buffer(b, Access::TransferWrite);
-        }
+        // The frame's submission waits for the acquire at the transfer stage.
+        g.acquired(target.image, vk::PipelineStageFlags2::TRANSFER);
         let (w, h) = (self.width, self.height);
-        pass.record(|cmd| {
-            barrier(
-                cmd,
-                (transfer, vk::AccessFlags2::NONE),
-                (transfer, vk::AccessFlags2::TRANSFER_WRITE),
-                vk::ImageLayout::UNDEFINED,
-                vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-            );
-            let layers = vk::ImageSubresourceLayers {
-                aspect_mask: vk::ImageAspectFlags::COLOR,
-                mip_level: 0,
-                base_array_layer: 0,
-                layer_count: 1,
-            };
-            let corner = |x: u32, y: u32| vk::Offset3D {
-                x: x as i32,
-                y: y as i32,
-                z: 1,
-            };
-            let region = vk::ImageBlit::default()
-                .src_subresource(layers)
-                .src_offsets([vk::Offset3D::default(), corner(w, h)])
-                .dst_subresource(layers)
-                .dst_offsets([
-                    vk::Offset3D::default(),
-                    corner(target.extent.width, target.extent.height),
-                ]);
-            unsafe {
-                d.cmd_blit_image(
-                    cmd,
-                    self.image.raw,
-                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    target.image,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    &[region],
-                    vk::Filter::NEAREST,
-                )
-            };
-            let mut layout = vk::ImageLayout::TRANSFER_DST_OPTIMAL;
-            let mut last = (transfer, vk::AccessFlags2::TRANSFER_WRITE);
-            if let Some(b) = shot {
-                let (src, src_layout, sw, sh) = if shot_from_display {
-                    (self.image.raw, vk::ImageLayout::TRANSFER_SRC_OPTIMAL, w, h)
-                } else {
-                    barrier(
+        let corner = |x: u32, y: u32| vk::Offset3D {
+            x: x as i32,
+            y: y as i32,
+            z: 1,
+        };
+        g.pass("present")
+            .image(&self.image, Access::TransferRead)
+            .external_image(target.image, color, Access::TransferWrite)
+            .record(|cmd| {
+                let region = vk::ImageBlit::default()
+                    .src_subresource(layers)
+                    .src_offsets([vk::Offset3D::default(), corner(w, h)])
+                    .dst_subresource(layers)
+                    .dst_offsets([
+                        vk::Offset3D::default(),
+                        corner(target.extent.width, target.extent.height),
+                    ]);
+                unsafe {
+                    d.cmd_blit_image(
                         cmd,
-                        last,
-                        (transfer, vk::AccessFlags2::TRANSFER_READ),
-                        layout,
+                        self.image.raw,
                         vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                    );
-                    layout = vk::ImageLayout::TRANSFER_SRC_OPTIMAL;
-                    last = (transfer, vk::AccessFlags2::TRANSFER_READ);
-                    (
                         target.image,
-                        layout,
-                        target.extent.width,
-                        target.extent.height,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        &[region],
+                        vk::Filter::NEAREST,
                     )
                 };
-                let copy = vk::BufferImageCopy::default()
-                    .image_subresource(layers)
-                    .image_extent(vk::Extent3D {
-                        width: sw,
-                        height: sh,
-                        depth: 1,
-                    });
-                unsafe { d.cmd_copy_image_to_buffer(cmd, src, src_layout, b.raw, &[copy]) };
-            }
-            // Presentation needs no access; the present waits on the frame's semaphore.
-            barrier(
-                cmd,
-                last,
-                (vk::PipelineStageFlags2::NONE, vk::AccessFlags2::NONE),
-                layout,
-                vk::ImageLayout::PRESENT_SRC_KHR,
-            );
-        });
+            });
+        if let Some(b) = shot {
+            let (sw, sh) = (self.shot_shape.0, self.shot_shape.1);
+            let copy = vk::BufferImageCopy::default()
+                .image_subresource(layers)
+                .image_extent(vk::Extent3D {
+                    width: sw,
+                    height: sh,
+                    depth: 1,
+                });
+            let pass = g.pass("screenshot").buffer(b, Access::TransferWrite);
+            let (pass, src) = if shot_from_display {
+                (
+                    pass.image(&self.image, Access::TransferRead),
+                    self.image.raw,
+                )
+            } else {
+                (
+                    pass.external_image(target.image, color, Access::TransferRead),
+                    target.image,
+                )
+            };
+            pass.record(|cmd| unsafe {
+                d.cmd_copy_image_to_buffer(
+                    cmd,
+                    src,
+                    vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                    b.raw,
+                    &[copy],
+                )
+            });
+        }
+        g.pass("to present")
+            .external_image(target.image, color, Access::Present)
+            .untimed()
+            .record(|_| {});
         if let Some(b) = shot {
             g.pass("screenshot to host")
                 .buffer(b, Access::HostRead)

@@ -30,6 +30,9 @@ pub enum Access {
     ComputeIndirectRead,
     /// Storage image or buffer atomics from the fragment stage (voxelization).
     FragmentStorageReadWrite,
+    /// Handed to the presentation engine (a swapchain image; the present waits on a
+    /// semaphore signalled after the frame, so no stage or access is needed).
+    Present,
 }
 
 /// The synchronization scope and layout an access needs.
@@ -124,6 +127,7 @@ impl Access {
                 L::GENERAL,
                 true,
             ),
+            Access::Present => (S::NONE, A::NONE, L::PRESENT_SRC_KHR, false),
         };
         AccessInfo {
             stage,
@@ -254,6 +258,18 @@ impl ResourceStates {
     pub fn forget(&mut self, handle: impl vk::Handle) {
         self.map.remove(&handle.as_raw());
     }
+    /// A swapchain image just acquired: its contents are undefined, and the frame's submission
+    /// waits for the acquire at `stage`, so the first barrier starts from that stage (which
+    /// puts its layout transition after the acquire).
+    pub fn acquired(&mut self, image: vk::Image, stage: vk::PipelineStageFlags2) {
+        self.map.insert(
+            vk::Handle::as_raw(image),
+            State {
+                last_write: Some((stage, vk::AccessFlags2::NONE)),
+                ..State::default()
+            },
+        );
+    }
     fn get(&mut self, raw: u64) -> &mut State {
         self.map.entry(raw).or_default()
     }
@@ -262,6 +278,8 @@ impl ResourceStates {
 enum Res<'r> {
     Image(&'r Image),
     Buffer(&'r Buffer),
+    /// An image the graph does not own (a swapchain image), with the range it uses.
+    External(vk::Image, vk::ImageSubresourceRange),
 }
 
 /// Records passes into one command buffer.
@@ -299,6 +317,11 @@ impl<'a> Graph<'a> {
         }
     }
 
+    /// See [`ResourceStates::acquired`].
+    pub fn acquired(&mut self, image: vk::Image, stage: vk::PipelineStageFlags2) {
+        self.states.acquired(image, stage);
+    }
+
     pub fn pass<'g, 'r>(&'g mut self, name: &'r str) -> PassBuilder<'g, 'a, 'r> {
         PassBuilder {
             graph: self,
@@ -318,6 +341,16 @@ impl<'r> PassBuilder<'_, '_, 'r> {
         self.uses.push((Res::Buffer(buffer), access));
         self
     }
+    /// An image owned elsewhere (a swapchain image), tracked by its handle like the others.
+    pub fn external_image(
+        mut self,
+        image: vk::Image,
+        range: vk::ImageSubresourceRange,
+        access: Access,
+    ) -> Self {
+        self.uses.push((Res::External(image, range), access));
+        self
+    }
 
     /// No timestamp scope (for passes that only move resources between accesses).
     pub fn untimed(mut self) -> Self {
@@ -333,8 +366,13 @@ impl<'r> PassBuilder<'_, '_, 'r> {
         let mut buffer_barriers = Vec::new();
         for (res, access) in &self.uses {
             match res {
-                Res::Image(img) => {
-                    let st = g.states.get(vk::Handle::as_raw(img.raw));
+                Res::Image(_) | Res::External(..) => {
+                    let (raw, range) = match res {
+                        Res::Image(img) => (img.raw, img.full_range()),
+                        Res::External(raw, range) => (*raw, *range),
+                        Res::Buffer(_) => unreachable!(),
+                    };
+                    let st = g.states.get(vk::Handle::as_raw(raw));
                     if let Some(b) = derive(st, *access, true) {
                         image_barriers.push(
                             vk::ImageMemoryBarrier2::default()
@@ -344,8 +382,8 @@ impl<'r> PassBuilder<'_, '_, 'r> {
                                 .dst_access_mask(b.dst_access)
                                 .old_layout(b.old_layout)
                                 .new_layout(b.new_layout)
-                                .image(img.raw)
-                                .subresource_range(img.full_range()),
+                                .image(raw)
+                                .subresource_range(range),
                         );
                     }
                 }
@@ -459,6 +497,22 @@ mod tests {
         let mut s = State::default();
         assert!(derive(&mut s, Access::VertexBuffer, false).is_none());
         assert!(derive(&mut s, Access::IndexBuffer, false).is_none());
+    }
+
+    #[test]
+    fn an_acquired_image_waits_for_the_acquire_and_ends_ready_to_present() {
+        use ash::vk::Handle;
+        let mut states = ResourceStates::default();
+        let image = vk::Image::from_raw(7);
+        states.acquired(image, vk::PipelineStageFlags2::TRANSFER);
+        let s = states.get(7);
+        let b = derive(s, Access::TransferWrite, true).unwrap();
+        assert_eq!(b.old_layout, vk::ImageLayout::UNDEFINED);
+        // The transition chains with the acquire semaphore's wait at the transfer stage.
+        assert_eq!(b.src_stage, vk::PipelineStageFlags2::TRANSFER);
+        let b = derive(s, Access::Present, true).unwrap();
+        assert_eq!(b.new_layout, vk::ImageLayout::PRESENT_SRC_KHR);
+        assert_eq!(b.src_access, vk::AccessFlags2::TRANSFER_WRITE);
     }
 
     #[test]
