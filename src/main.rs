@@ -309,6 +309,17 @@ fn gi_settings(args: &Args) -> Result<GiSettings> {
     Ok(gi)
 }
 
+/// A scene with nothing to light it renders black: say so rather than leave a user guessing.
+fn warn_if_unlit(scene: &Scene, path: &Path) {
+    if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.is_emissive()) {
+        eprintln!(
+            "warning: {}: the scene has no lights and no emission; the image is black \
+             (--sun EL,AZ adds a light)",
+            path.display()
+        );
+    }
+}
+
 /// `--spin NODE` and `--time T`: what moves and when the image is taken.
 fn motion(args: &Args, scene: &Scene) -> Result<(scene::Motion, f32)> {
     let mut spin = args
@@ -376,6 +387,7 @@ fn view(args: &Args) -> Result<()> {
     if let Some(spec) = args.value("--sun") {
         scene.lights.push(parse_sun(spec)?);
     }
+    warn_if_unlit(&scene, &scene_path);
     let (motion, _) = motion(args, &scene)?;
     if args.value("--time").is_some() {
         bail!("--time goes with render (the window's scene time runs from 0)");
@@ -439,12 +451,7 @@ fn render(args: &Args) -> Result<()> {
     if let Some(spec) = args.value("--sun") {
         scene.lights.push(parse_sun(spec)?);
     }
-    if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.is_emissive()) {
-        eprintln!(
-            "warning: {}: the scene has no lights and no emission; the image is black",
-            scene_path.display()
-        );
-    }
+    warn_if_unlit(&scene, &scene_path);
     let (motion, time) = motion(args, &scene)?;
     let mut settings = settings;
     settings.dynamic_nodes = motion.prepare(&mut scene);
