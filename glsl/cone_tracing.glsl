@@ -107,11 +107,20 @@ mat3 tangent_frame(vec3 n) {
     vec3 guide = abs(dot(n, vec3(0.0, 1.0, 0.0))) > 0.999 ? vec3(0.0, 0.0, 1.0) : vec3(0.0, 1.0, 0.0);
     vec3 t = normalize(cross(guide, n));
 #else
-    // Branchless basis (Duff et al. 2017): no division by a vanishing cross product.
-    float s = n.z >= 0.0 ? 1.0 : -1.0;
-    float a = -1.0 / (s + n.z);
-    float b = n.x * n.y * a;
-    vec3 t = vec3(1.0 + s * n.x * n.x * a, s * b, -s * n.x);
+    // Branchless basis (Duff et al. 2017): no division by a vanishing cross product. Its seam
+    // (where the tangent jumps) lies where the normal's third coordinate changes sign; taken in
+    // world axes that is every floor and every wall facing x, and a turn by a micro-radian would
+    // flip their cones' azimuths. So the basis is built in a skewed frame whose third axis k
+    // is far from orthogonal to axis-aligned and 45-degree normals (|n.k| >= 0.19).
+    const vec3 k = vec3(0.2672612, 0.5345225, 0.8017837);  // normalize(1, 2, 3)
+    const vec3 u = vec3(-0.8944272, 0.4472136, 0.0);       // normalize(cross(z, k))
+    const vec3 v = vec3(-0.3585686, -0.7171372, 0.5976143); // cross(k, u)
+    vec3 m = vec3(dot(n, u), dot(n, v), dot(n, k));
+    float s = m.z >= 0.0 ? 1.0 : -1.0;
+    float a = -1.0 / (s + m.z);
+    float b = m.x * m.y * a;
+    vec3 tm = vec3(1.0 + s * m.x * m.x * a, s * b, -s * m.x);
+    vec3 t = tm.x * u + tm.y * v + tm.z * k;
 #endif
     return mat3(t, cross(n, t), n);
 }
