@@ -23,6 +23,20 @@ pub enum TraceMode {
     Directional = 14,
 }
 
+/// The trace set's frame-sized images: the G-buffer (bindings 0 to 4) and the output (5).
+fn frame_descs<'a>(
+    gbuffer: &[(vk::ImageView, vk::Sampler)],
+    out: &'a Image,
+) -> Vec<(u32, Desc<'a>)> {
+    let mut descs: Vec<(u32, Desc)> = gbuffer
+        .iter()
+        .enumerate()
+        .map(|(i, &(v, s))| (i as u32, Desc::Sampled(v, s)))
+        .collect();
+    descs.push((5, Desc::StorageImage(out.view)));
+    descs
+}
+
 pub struct Trace {
     trace: Pipeline,
     trace_set: Set,
@@ -42,13 +56,7 @@ impl Trace {
         paper: bool,
     ) -> VkResult<Trace> {
         let comp = vk::ShaderStageFlags::COMPUTE;
-        let mut descs: Vec<(u32, Desc)> = gbuffer
-            .iter()
-            .enumerate()
-            .map(|(i, &(v, s))| (i as u32, Desc::Sampled(v, s)))
-            .collect();
-        descs.push((5, Desc::StorageImage(out.view)));
-        let trace_set = pool.set(comp, &descs)?;
+        let trace_set = pool.set(comp, &frame_descs(gbuffer, out))?;
         let cones = cone_set(pool, volumes, true)?;
         let v = |s: &str| {
             if paper {
@@ -86,13 +94,7 @@ impl Trace {
     /// Points the passes at new G-buffer and output images (a resized frame). The sets must
     /// not be in use (the frames before have been waited for).
     pub fn retarget(&self, ctx: &Context, gbuffer: &[(vk::ImageView, vk::Sampler)], out: &Image) {
-        let mut descs: Vec<(u32, Desc)> = gbuffer
-            .iter()
-            .enumerate()
-            .map(|(i, &(v, s))| (i as u32, Desc::Sampled(v, s)))
-            .collect();
-        descs.push((5, Desc::StorageImage(out.view)));
-        pipelines::write_set(ctx, self.trace_set.raw, &descs);
+        pipelines::write_set(ctx, self.trace_set.raw, &frame_descs(gbuffer, out));
         pipelines::write_set(ctx, self.view_set.raw, &[(5, Desc::StorageImage(out.view))]);
     }
 
