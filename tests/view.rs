@@ -462,6 +462,45 @@ fn the_light_key_turns_the_sun() {
 }
 
 #[test]
+fn a_window_hidden_shown_again_screenshot_and_closed_by_keys() {
+    // Minimizing a window on X11 unmaps it: xdotool unmaps the running window and maps it
+    // again, then presses F12 (a screenshot into the working directory) and Esc (quit) as
+    // real key events. The run must not end while hidden, nor hang, nor report anything.
+    let dir = common::temp_dir("view-unmap");
+    let script = format!(
+        "{exe} view --width 96 --height 96 --voxels 16 --shadow-res 256 --validate & pid=$!; \
+         for i in $(seq 100); do wid=$(xdotool search --name voxgi | head -1); \
+         [ -n \"$wid\" ] && break; sleep 0.2; done; \
+         [ -n \"$wid\" ] || {{ echo no window; exit 3; }}; \
+         sleep 1; xdotool windowunmap $wid; sleep 2; \
+         kill -0 $pid || {{ echo ended while hidden; exit 4; }}; \
+         xdotool windowmap $wid; sleep 1; xdotool windowfocus $wid; sleep 0.5; \
+         xdotool key F12; \
+         for i in $(seq 300); do [ -f voxgi-view-1.png ] && break; sleep 0.2; done; \
+         xdotool key Escape; wait $pid",
+        exe = env!("CARGO_BIN_EXE_voxgi"),
+    );
+    let _one = ONE_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
+    // A key that never arrives would leave the window open: give up after two minutes.
+    let o = Command::new("timeout")
+        .args([
+            "120",
+            "xvfb-run",
+            "-a",
+            "-s",
+            "-screen 0 1024x768x24",
+            "sh",
+            "-c",
+            &script,
+        ])
+        .current_dir(&dir)
+        .output()
+        .expect("xvfb-run (bash .ci/install-deps installs it, and xdotool)");
+    assert!(o.status.success(), "{}", show(&o));
+    assert_shows_something(&png(&dir.join("voxgi-view-1.png")), "F12's screenshot");
+}
+
+#[test]
 fn bad_view_arguments_fail_clearly_before_opening_a_window() {
     for (args, want) in [
         (vec!["--screenshot", "x.jpg", "--frames", "1"], "x.jpg"),

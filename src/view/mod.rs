@@ -458,8 +458,14 @@ impl App {
         }
         let mut changed = true;
         match code {
-            KeyCode::Escape => el.exit(),
-            KeyCode::KeyR => self.camera.reset(),
+            KeyCode::Escape => {
+                el.exit();
+                changed = false;
+            }
+            KeyCode::KeyR => {
+                self.camera.reset();
+                changed = false;
+            }
             _ if DIGITS[1..=MODES.len()].contains(&code) => {
                 let i = DIGITS[1..].iter().position(|&k| k == code).unwrap_or(0);
                 self.mode = MODES[i];
