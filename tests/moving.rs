@@ -220,3 +220,39 @@ fn a_turn_by_a_hair_changes_nothing() {
         m.rel_mse
     );
 }
+
+#[test]
+fn a_node_moving_under_a_point_light_redraws_the_views_it_crosses() {
+    // A point light's six views: moving the square redraws only the views its old and new
+    // places touch; the frame must still be a fresh renderer's.
+    let (mut s, node) = scene();
+    s.lights[0] = light(
+        LightKind::Point,
+        Vec3::splat(8.0),
+        Vec3::new(0.3, 1.6, 0.2),
+        Vec3::NEG_Y,
+    );
+    let moved = Mat4::from_translation(Vec3::new(1.1, -0.4, 0.9));
+    let ctx = context();
+    let stats = ctx.stats.clone();
+    let (before, after) = {
+        let mut r = Renderer::new(&ctx, &s, settings(node)).unwrap();
+        let before = image(&mut r);
+        r.set_node_transform(node, moved);
+        (before, image(&mut r))
+    };
+    let fresh = {
+        let mut s2 = s.clone();
+        for i in s2.instances.iter_mut().filter(|i| i.node == node) {
+            i.world = moved;
+        }
+        let mut r = Renderer::new(&ctx, &s2, settings(node)).unwrap();
+        image(&mut r)
+    };
+    drop(ctx);
+    assert_eq!(stats.count(), 0, "{}", stats.messages().join("\n"));
+    let change = compare(&after, &before).rel_mse;
+    assert!(change > 0.01, "the move barely shows (relMSE {change})");
+    let m = compare(&after, &fresh).rel_mse;
+    assert!(m < 1e-6, "moved vs fresh: relMSE {m}");
+}

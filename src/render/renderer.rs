@@ -225,8 +225,11 @@ pub struct Renderer {
     /// Test hook: record this pass without its barriers.
     pub omit_barriers_of: Option<String>,
     light_count: u32,
-    /// The shadow maps must be drawn (first frame, or a light or a node moved).
-    shadows_dirty: bool,
+    /// Per shadow view: it must be drawn (first frame, its light moved, or a node moved
+    /// through its frustum).
+    shadow_views_dirty: Vec<bool>,
+    /// Object-space bounds of each instance's primitive (which shadow views a move touches).
+    instance_bounds: Vec<crate::scene::Aabb>,
     /// The scene's bounds (light views are fitted to them).
     bounds: crate::scene::Aabb,
     /// Per instance: moved by a dynamic node (voxelized every frame).
@@ -574,7 +577,12 @@ impl Renderer {
                 .collect(),
             light_count: scene.lights.len() as u32,
             bounds: scene.bounds,
-            shadows_dirty: true,
+            shadow_views_dirty: vec![true; gpu.shadow_view_count as usize],
+            instance_bounds: scene
+                .instances
+                .iter()
+                .map(|i| scene.primitives[i.primitive as usize].bounds)
+                .collect(),
             dynamic_instances,
             instance_nodes: scene.instances.iter().map(|i| i.node).collect(),
             gi,
@@ -772,7 +780,7 @@ impl Renderer {
         }
         self.timer = timer;
         submitted?;
-        self.shadows_dirty = false;
+        self.shadow_views_dirty.fill(false);
         // The static voxels now hold the static geometry until a static node moves.
         if let Some(gi) = self.gi.as_mut() {
             gi.static_dirty = false;
@@ -785,8 +793,8 @@ impl Renderer {
         let d = &ctx.device;
         let res = self.settings.shadow_resolution;
 
-        // Shadow maps change only when a light or a node moves.
-        if self.gpu.shadow_view_count > 0 && self.shadows_dirty {
+        // A shadow view changes only when its light moves or a node moves through it.
+        if self.shadow_views_dirty.iter().any(|&d| d) {
             let mut pass = g
                 .pass("shadows")
                 .image(&self.shadow_map, Access::DepthAttachmentWrite)
@@ -798,6 +806,9 @@ impl Renderer {
             }
             pass.record(|cmd| {
                 for view in 0..self.gpu.shadow_view_count {
+                    if !self.shadow_views_dirty[view as usize] {
+                        continue;
+                    }
                     let depth = pipelines::cleared_depth(
                         self.shadow_map.layer_view(view),
                         vk::AttachmentStoreOp::STORE,
@@ -980,14 +991,22 @@ impl Renderer {
 
     /// Moves every instance of a glTF node. A dynamic node is voxelized again every frame
     /// anyway; moving a static node voxelizes the static geometry again on the next frame.
-    /// Either way the next frame draws the shadow maps again.
+    /// Either way the next frame draws again the shadow views it moves through.
     pub fn set_node_transform(&mut self, node: usize, world: Mat4) {
         let mut moved_static = false;
         for (i, &n) in self.instance_nodes.iter().enumerate() {
             if n == node && self.transforms[i] != world {
+                // Where it was and where it goes: the views that see either draw again.
+                let b = &self.instance_bounds[i];
+                let swept = b
+                    .transformed(&self.transforms[i])
+                    .union(&b.transformed(&world));
+                let views = self.gpu.light_views.iter().flat_map(|l| &l.views);
+                for (dirty, v) in self.shadow_views_dirty.iter_mut().zip(views) {
+                    *dirty |= super::shadows::may_see(&v.view_proj, &swept);
+                }
                 self.transforms[i] = world;
                 moved_static |= !self.dynamic_instances[i];
-                self.shadows_dirty = true;
             }
         }
         if let (true, Some(gi)) = (moved_static, self.gi.as_mut()) {
@@ -1060,12 +1079,12 @@ impl Renderer {
             self.gpu.shadow_views.write(0, as_bytes(&all_views));
         }
         self.gpu.light_views = views;
-        self.shadows_dirty = true;
+        self.shadow_views_dirty.fill(true);
         Ok(())
     }
 
     /// The passes a frame records, in order (what `--timings` will list; the shadow maps only
-    /// on the first frame and after a light or a node moved).
+    /// on the first frame and after a light or a node moved through them).
     pub fn passes(&self) -> Vec<String> {
         let mut p = Vec::new();
         if self.gpu.shadow_view_count > 0 {

@@ -53,6 +53,22 @@ fn perspective(eye: Vec3, dir: Vec3, fov: f32, bounds: &Aabb, resolution: u32) -
     }
 }
 
+/// Whether anything inside `bounds` can land in the view (false only when all eight corners are
+/// beyond one clip plane), so a caster moving there must draw the view again.
+pub fn may_see(view_proj: &Mat4, bounds: &Aabb) -> bool {
+    if bounds.is_empty() {
+        return false;
+    }
+    let clip = bounds.corners().map(|c| *view_proj * c.extend(1.0));
+    let outside = |f: &dyn Fn(&Vec4) -> bool| clip.iter().all(f);
+    !(outside(&|p| p.x < -p.w)
+        || outside(&|p| p.x > p.w)
+        || outside(&|p| p.y < -p.w)
+        || outside(&|p| p.y > p.w)
+        || outside(&|p| p.z < 0.0)
+        || outside(&|p| p.z > p.w))
+}
+
 /// The views of every light, in light order. `pcf_radius` is in texels.
 pub fn light_views(
     lights: &[Light],
@@ -118,4 +134,28 @@ pub fn light_views(
         out.push(LightViews { first, views });
     }
     out
+}
+
+#[cfg(test)]
+mod frustum_tests {
+    use super::*;
+
+    #[test]
+    fn a_box_is_seen_unless_wholly_beyond_one_plane() {
+        // A spot-like view at the origin looking down -Z, 90 degrees, depth 0.1 to 10.
+        let vp = Mat4::perspective_rh(std::f32::consts::FRAC_PI_2, 1.0, 0.1, 10.0)
+            * Mat4::look_to_rh(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y);
+        let b = |min: [f32; 3], max: [f32; 3]| Aabb {
+            min: Vec3::from(min),
+            max: Vec3::from(max),
+        };
+        assert!(may_see(&vp, &b([-0.5, -0.5, -3.0], [0.5, 0.5, -2.0])));
+        // Straddling the side plane still counts.
+        assert!(may_see(&vp, &b([1.5, -0.5, -2.5], [3.0, 0.5, -2.0])));
+        // Behind the light, beyond the far plane, or off to the side: not seen.
+        assert!(!may_see(&vp, &b([-0.5, -0.5, 1.0], [0.5, 0.5, 2.0])));
+        assert!(!may_see(&vp, &b([-0.5, -0.5, -30.0], [0.5, 0.5, -20.0])));
+        assert!(!may_see(&vp, &b([5.0, -0.5, -3.0], [6.0, 0.5, -2.0])));
+        assert!(!may_see(&vp, &Aabb::EMPTY));
+    }
 }
