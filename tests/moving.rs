@@ -58,6 +58,16 @@ fn scene() -> (Scene, usize) {
     (s, node)
 }
 
+/// The scene with `node` placed at `world` from the start (what a fresh renderer should make of
+/// a moved node).
+fn moved_scene(s: &Scene, node: usize, world: Mat4) -> Scene {
+    let mut s = s.clone();
+    for i in s.instances.iter_mut().filter(|i| i.node == node) {
+        i.world = world;
+    }
+    s
+}
+
 fn settings(node: usize) -> RenderSettings {
     RenderSettings {
         width: 48,
@@ -112,11 +122,8 @@ fn moved_lights_and_nodes_render_as_a_fresh_renderer_would() {
         assert!(r.set_lights(&[]).is_err());
     }
     let fresh = {
-        let mut s2 = s.clone();
+        let mut s2 = moved_scene(&s, node, moved_node);
         s2.lights[0] = moved_light;
-        for i in s2.instances.iter_mut().filter(|i| i.node == node) {
-            i.world = moved_node;
-        }
         let mut r = Renderer::new(&ctx, &s2, settings(node)).unwrap();
         image(&mut r)
     };
@@ -242,11 +249,7 @@ fn a_node_moving_under_a_point_light_redraws_the_views_it_crosses() {
         (before, image(&mut r))
     };
     let fresh = {
-        let mut s2 = s.clone();
-        for i in s2.instances.iter_mut().filter(|i| i.node == node) {
-            i.world = moved;
-        }
-        let mut r = Renderer::new(&ctx, &s2, settings(node)).unwrap();
+        let mut r = Renderer::new(&ctx, &moved_scene(&s, node, moved), settings(node)).unwrap();
         image(&mut r)
     };
     drop(ctx);

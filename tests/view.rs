@@ -82,6 +82,15 @@ fn assert_shows_something(img: &image::RgbImage, what: &str) {
     );
 }
 
+/// Channels that differ by more than 8 of 255 between two images of one size.
+fn changed_channels(a: &image::RgbImage, b: &image::RgbImage) -> usize {
+    a.as_raw()
+        .iter()
+        .zip(b.as_raw())
+        .filter(|(x, y)| x.abs_diff(**y) > 8)
+        .count()
+}
+
 /// Runs the window and `voxgi render` with the same settings (`common`), the window's
 /// extra arguments `window`, and the render's `still` (the pose of its last frame); returns
 /// the FLIP error between the screenshot and the render, the screenshot, and what the
@@ -396,12 +405,7 @@ fn animations_play_in_the_window_as_render_poses_them() {
         shots.push(shot);
     }
     // The animation moved something between 0.5 s and 1.5 s.
-    let changed = shots[0]
-        .as_raw()
-        .iter()
-        .zip(shots[1].as_raw())
-        .filter(|(a, b)| a.abs_diff(**b) > 8)
-        .count();
+    let changed = changed_channels(&shots[0], &shots[1]);
     assert!(
         changed > 20,
         "only {changed} channels changed between 0.5 s and 1.5 s"
@@ -449,12 +453,7 @@ fn the_light_key_turns_the_sun() {
         assert!(o.status.success(), "voxgi view failed:\n{}", show(&o));
         shots.push(png(&shot));
     }
-    let changed = shots[0]
-        .as_raw()
-        .iter()
-        .zip(shots[1].as_raw())
-        .filter(|(a, b)| a.abs_diff(**b) > 8)
-        .count();
+    let changed = changed_channels(&shots[0], &shots[1]);
     assert!(
         changed > 20,
         "turning the sun changed only {changed} channels"
