@@ -144,8 +144,10 @@ impl Args {
         let mut options = Vec::new();
         let mut it = args.iter();
         while let Some(a) = it.next() {
-            if FLAGS.contains(&a.as_str()) || a == "-h" {
-                options.push((a.replace("-h", "--help"), None));
+            if a == "-h" {
+                options.push(("--help".to_string(), None));
+            } else if FLAGS.contains(&a.as_str()) {
+                options.push((a.clone(), None));
             } else if VALUED.contains(&a.as_str()) {
                 let v = it.next().with_context(|| format!("{a} needs a value"))?;
                 options.push((a.clone(), Some(v.clone())));

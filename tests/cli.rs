@@ -74,3 +74,18 @@ fn bad_input_is_a_clear_error_with_no_output() {
         .collect();
     assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
 }
+
+#[test]
+fn help_after_a_command_prints_usage_and_runs_nothing() {
+    let dir = temp_dir("help");
+    for flag in ["--help", "-h"] {
+        let (ok, out, err) = common::voxgi_in(&dir, &["render", flag]);
+        assert!(ok, "render {flag} failed:\n{err}");
+        assert!(
+            out.contains("voxgi render"),
+            "render {flag} printed:\n{out}"
+        );
+    }
+    let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+    assert!(left.is_empty(), "render --help wrote {left:?}");
+}

@@ -11,7 +11,13 @@ pub fn scenes_dir() -> PathBuf {
 
 /// Runs the voxgi binary; fails the test if it panicked. Returns (success, stdout, stderr).
 pub fn voxgi(args: &[&str]) -> (bool, String, String) {
+    voxgi_in(Path::new("."), args)
+}
+
+/// `voxgi` run in `dir` (for checking what it leaves in its working directory).
+pub fn voxgi_in(dir: &Path, args: &[&str]) -> (bool, String, String) {
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_voxgi"))
+        .current_dir(dir)
         .args(args)
         .output()
         .expect("run voxgi");
