@@ -14,12 +14,12 @@ voxgi: real-time global illumination by deferred voxel shading, on Vulkan
 
 USAGE:
   voxgi render [SCENE] [--out FILE] [--width W] [--height H] [--mode MODE] [--mip L]
-               [--voxels N] [--bounces 1|2] [--paper] [--cones N] [--aperture DEG]
+               [--voxels N] [--bounces N] [--paper] [--cones N] [--aperture DEG]
                [--step F] [--voxel-shadows] [--cone-shadows]
                [--frames N] [--exposure EV] [--shadow-res N] [--sun EL,AZ[,E]]
                [--spin NODE [--spin-speed DEG]] [--time T]
                [--validate] [--timings] [--device NAME]
-  voxgi view [SCENE] [--width W] [--height H] [--mode MODE] [--voxels N] [--bounces 1|2]
+  voxgi view [SCENE] [--width W] [--height H] [--mode MODE] [--voxels N] [--bounces N]
              [--paper] [--exposure EV] [--sun EL,AZ[,E]] [--spin NODE [--spin-speed DEG]]
              [--shadow-res N] [--no-vsync]
              [--frames N] [--screenshot FILE.png] [--resize FRAME:WxH].. [--press FRAME:KEY]..
@@ -40,7 +40,8 @@ USAGE:
                voxels-emission, voxels-radiance: the first voxel along each ray
   --mip L      with voxels-radiance: the directional volumes at mip level L
   --voxels N   voxels per side of the grid (default 64)
-  --bounces B  1 (default): direct light in the voxels; 2: plus a second bounce
+  --bounces B  1 (default): direct light in the voxels; 2 to 8: plus B - 1 bounces between
+               voxels (each one more bounce pass and mipmap)
   --paper      the original's behaviour and constants (RGBA8 averages and volumes, 6 cones)
   --cones N, --aperture DEG, --step F   diffuse cones per pixel (6), their aperture (60),
                step as a fraction of the cone diameter (0.5)
@@ -291,8 +292,8 @@ fn gi_settings(args: &Args) -> Result<GiSettings> {
         }
     };
     gi.bounces = args.number("--bounces", gi.bounces)?;
-    if !(1..=2).contains(&gi.bounces) {
-        bail!("--bounces must be 1 or 2");
+    if !(1..=voxgi::gi::MAX_BOUNCES).contains(&gi.bounces) {
+        bail!("--bounces must be 1 to {}", voxgi::gi::MAX_BOUNCES);
     }
     gi.cone_count = args.number("--cones", gi.cone_count)?;
     if !(1..=16).contains(&gi.cone_count) {

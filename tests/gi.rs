@@ -331,3 +331,34 @@ fn paper_mode_and_odd_grids_render_clean_full_frames() {
         );
     }
 }
+
+#[test]
+fn each_bounce_adds_less_light_than_the_one_before() {
+    // The furnace: a closed box of albedo 0.5 whose walls all emit 1. Bounce k adds about
+    // albedo^(k-1), so the mean grows with every bounce by less each time, towards 2.
+    let (b, camera) = voxgi::hard::scenes::furnace(0.5, 1.0);
+    let path = Path::new(env!("CARGO_TARGET_TMPDIR"))
+        .join(format!("voxgi-bounces-{}.glb", std::process::id()));
+    std::fs::write(&path, b.to_glb()).unwrap();
+    let mut s = voxgi::scene::load(&path).unwrap();
+    std::fs::remove_file(&path).unwrap();
+    s.camera = camera;
+    let means: Vec<f32> = (1..=4)
+        .map(|bounces| {
+            let mut set = settings(Mode::Full, 32, 24);
+            set.gi.bounces = bounces;
+            let img = render(&s, set);
+            assert!(!img.has_non_finite());
+            img.pixels.iter().map(|p| p[1]).sum::<f32>() / img.pixels.len() as f32
+        })
+        .collect();
+    let added: Vec<f32> = means.windows(2).map(|w| w[1] - w[0]).collect();
+    eprintln!("means {means:?}, added {added:?}");
+    assert!(means[0] > 1.0 && means[3] < 2.0, "means {means:?}");
+    for w in added.windows(2) {
+        assert!(
+            w[0] > 0.0 && w[1] > 0.1 * w[0] && w[1] < 0.7 * w[0],
+            "each bounce must add a fraction of the light the one before added: {means:?}"
+        );
+    }
+}

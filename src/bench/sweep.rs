@@ -175,7 +175,13 @@ const AXES: &[(&str, f64, f64, bool, Apply)] = &[
     // (name, min, max, integer, apply); voxels and paper are read first (they pick the base).
     ("voxels", 4.0, 1024.0, true, |g, v| g.voxels = v as u32),
     ("paper", 0.0, 1.0, true, |g, v| g.paper = v != 0.0),
-    ("bounces", 1.0, 2.0, true, |g, v| g.bounces = v as u32),
+    (
+        "bounces",
+        1.0,
+        crate::gi::MAX_BOUNCES as f64,
+        true,
+        |g, v| g.bounces = v as u32,
+    ),
     ("cones", 1.0, 16.0, true, |g, v| g.cone_count = v as u32),
     ("aperture", 0.5, 179.0, false, |g, v| {
         g.cone_aperture_deg = v as f32

@@ -99,13 +99,14 @@ impl Bounce {
         volumes: &Volumes,
         scene_set: vk::DescriptorSet,
         voxels_changed: bool,
+        name: &str,
     ) {
         let d = &ctx.device;
         // The list holds until the voxels change (static ones once, dynamic ones every frame).
         if voxels_changed {
             self.record_list(d, g, volumes, scene_set);
         }
-        let mut pass = read_voxel_data(g.pass("bounce"), volumes)
+        let mut pass = read_voxel_data(g.pass(name), volumes)
             .image(&volumes.radiance, Access::ComputeStorageReadWrite)
             .buffer(&self.list, Access::ComputeIndirectRead);
         for f in &volumes.faces {

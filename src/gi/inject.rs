@@ -87,10 +87,12 @@ impl Inject {
         volumes: &Volumes,
         scene_set: vk::DescriptorSet,
         shadow_map: &Image,
+        suffix: &str,
     ) {
         let d = &ctx.device;
         let n = volumes.grid.resolution;
-        read_voxel_data(g.pass("inject"), volumes)
+        let name = format!("inject{suffix}");
+        read_voxel_data(g.pass(&name), volumes)
             .image(shadow_map, Access::ComputeSampled)
             .image(&volumes.radiance, Access::ComputeStorageWrite)
             .record(|cmd| unsafe {

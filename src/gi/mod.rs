@@ -26,12 +26,16 @@ pub use mip::Mip;
 pub use trace::{Trace, TraceMode};
 pub use voxelize::Voxelizer;
 
+/// The most light bounces `GiSettings::bounces` may ask for.
+pub const MAX_BOUNCES: u32 = 8;
+
 /// Settings of the voxel passes. `Default` is the project's default; `paper()` the original's.
 #[derive(Clone, Debug, PartialEq)]
 pub struct GiSettings {
     /// Voxels per side of the grid.
     pub voxels: u32,
-    /// 1: direct light in the voxels only; 2: plus the second bounce.
+    /// 1: direct light in the voxels only; N >= 2: plus N - 1 bounces between voxels (each
+    /// gathers from the volumes the previous one left, up to [`MAX_BOUNCES`]).
     pub bounces: u32,
     /// Reproduce the original's behaviour and constants.
     pub paper: bool,
@@ -372,29 +376,55 @@ impl Gi {
                 .record(ctx, g, &self.volumes, gpu, true, draw_dynamic);
         }
         if let Some((inject, mip)) = &self.lighting {
-            inject.record(ctx, g, &self.volumes, scene_set, shadow_map);
+            inject.record(ctx, g, &self.volumes, scene_set, shadow_map, "");
             mip.record(ctx, g, &self.volumes, "");
             if let Some(b) = &self.bounce {
                 let voxels_changed = self.static_dirty || self.dynamic;
-                b.record(ctx, g, &self.volumes, scene_set, voxels_changed);
-                mip.record(ctx, g, &self.volumes, " (bounce)");
+                for k in 2..=self.settings.bounces {
+                    // The bounce adds to the radiance volume in place, so from the third on
+                    // the direct light is injected again first; the directional volumes still
+                    // hold the light of the bounces before.
+                    let (name, suffix) = bounce_names(k);
+                    if k > 2 {
+                        inject.record(ctx, g, &self.volumes, scene_set, shadow_map, &suffix);
+                    }
+                    let list = voxels_changed && k == 2;
+                    b.record(ctx, g, &self.volumes, scene_set, list, &name);
+                    mip.record(ctx, g, &self.volumes, &suffix);
+                }
             }
         }
     }
 
     /// Passes this renderer runs, for `voxgi info`.
-    pub fn passes(&self) -> Vec<&'static str> {
-        let mut p = vec!["voxelize static"];
+    pub fn passes(&self) -> Vec<String> {
+        let mut p: Vec<String> = vec!["voxelize static".into()];
         if self.dynamic {
-            p.extend(["clear dynamic", "voxelize dynamic"]);
+            p.extend(["clear dynamic".into(), "voxelize dynamic".into()]);
         }
         if self.lighting.is_some() {
-            p.extend(["inject", "mip base", "mip volume"]);
+            p.extend(["inject".into(), "mip base".into(), "mip volume".into()]);
         }
         if self.bounce.is_some() {
-            p.extend(["bounce", "mip base (bounce)", "mip volume (bounce)"]);
+            for k in 2..=self.settings.bounces {
+                let (name, s) = bounce_names(k);
+                if k > 2 {
+                    p.push(format!("inject{s}"));
+                }
+                p.extend([name, format!("mip base{s}"), format!("mip volume{s}")]);
+            }
         }
         p
+    }
+}
+
+/// The bounce pass of light bounce `k` and the suffix that tells the passes after it apart in
+/// timings: "bounce" and " (bounce)" for the second, "bounce 3" and " (bounce 3)" on.
+fn bounce_names(k: u32) -> (String, String) {
+    if k == 2 {
+        ("bounce".into(), " (bounce)".into())
+    } else {
+        (format!("bounce {k}"), format!(" (bounce {k})"))
     }
 }
 

@@ -46,7 +46,7 @@ pub const CONTROLS: &[(&str, &str)] = &[
         "voxels-radiance: one mip level down / up (the directional volumes)",
     ),
     ("G", "GI on / off (off: direct light only, no voxel work)"),
-    ("B", "bounces: 1 / 2"),
+    ("B", "bounces: 1, 2, 3, 4"),
     (
         "V / Shift+V",
         "voxel resolution up / down (16, 32, 64, 128, 256 per side)",
@@ -493,7 +493,7 @@ impl App {
                 self.rebuild = true;
             }
             KeyCode::KeyB => {
-                self.bounces = 3 - self.bounces;
+                self.bounces = self.bounces % 4 + 1;
                 self.rebuild = true;
             }
             KeyCode::KeyV => {
