@@ -24,7 +24,8 @@ layout(location = 4) flat in vec2 g_depth;
 #endif
 layout(location = 5) flat in int g_axis;
 #ifndef PAPER
-layout(location = 6) flat in float g_coverage;
+layout(location = 6) flat in vec4 g_tri01;
+layout(location = 7) flat in vec2 g_tri2;
 #endif
 
 #ifdef PAPER
@@ -39,6 +40,43 @@ RGBA8_AVG(average_emission, emission_grid)
 #else
 layout(set = 2, binding = 0, std430) buffer Accum { uint accum[]; };
 layout(set = 2, binding = 1, std430) buffer EmissionAccum { uint emission_accum[]; };
+#endif
+
+#ifndef PAPER
+// The fraction of the pixel (one voxel's face in the projection) the triangle covers: the
+// triangle clipped to the pixel's square (Sutherland-Hodgman), by the shoelace formula.
+// Conservative rasterization gives every voxel a triangle touches a fragment, so weighting by
+// this keeps a surface's edges from counting as whole voxels.
+float pixel_coverage(vec2 px) {
+    vec2 lo = floor(px), hi = lo + 1.0;
+    vec2 poly[8];
+    poly[0] = g_tri01.xy;
+    poly[1] = g_tri01.zw;
+    poly[2] = g_tri2;
+    int count = 3;
+    for (int side = 0; side < 4; side++) {
+        vec2 kept[8];
+        int k = 0;
+        for (int i = 0; i < count; i++) {
+            vec2 a = poly[i], b = poly[(i + 1) % count];
+            // Signed distance inside the side's edge of the square.
+            float da = side == 0 ? a.x - lo.x : side == 1 ? hi.x - a.x
+                     : side == 2 ? a.y - lo.y : hi.y - a.y;
+            float db = side == 0 ? b.x - lo.x : side == 1 ? hi.x - b.x
+                     : side == 2 ? b.y - lo.y : hi.y - b.y;
+            if (da >= 0.0 && k < 8) kept[k++] = a;
+            if ((da >= 0.0) != (db >= 0.0) && k < 8) kept[k++] = mix(a, b, da / (da - db));
+        }
+        poly = kept;
+        count = k;
+    }
+    float twice = 0.0;
+    for (int i = 0; i < count; i++) {
+        vec2 a = poly[i], b = poly[(i + 1) % count];
+        twice += a.x * b.y - a.y * b.x;
+    }
+    return clamp(0.5 * abs(twice), 0.0, 1.0);
+}
 #endif
 
 // Grid coordinates from (u, v, depth) of the projection along g_axis.
@@ -86,9 +124,12 @@ void main() {
     ivec3 nq = ivec3(round(normal * FIXED_ONE));
     uvec3 n2 = uvec3(round(normal * normal * FIXED_ONE));
     // Emission weighted by coverage, and the coverage summed beside it: a voxel's emission is
-    // the coverage-weighted mean of its surfaces', diluted where they cover less than the voxel.
-    uvec3 e = uvec3(round(max(emission, vec3(0.0)) * g_coverage * frame.cone.w));
-    uint cov = uint(round(g_coverage * FIXED_ONE));
+    // the coverage-weighted mean of its surfaces', diluted where they cover less than the voxel
+    // (a triangle smaller than a voxel, or an emitter's edge, emits its own power, not a
+    // voxel's).
+    float coverage = (frame.grid_info.w & FLAG_EMISSIVE) != 0u ? pixel_coverage(px) : 0.0;
+    uvec3 e = uvec3(round(max(emission, vec3(0.0)) * coverage * frame.cone.w));
+    uint cov = uint(round(coverage * FIXED_ONE));
     for (int z = z0; z <= z1 && z <= z0 + 2; z++) {
         ivec3 c = unswizzle(ivec3(ivec2(px), z));
         if (!in_grid(c)) continue;

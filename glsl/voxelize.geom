@@ -21,10 +21,11 @@ layout(location = 3) flat out vec4 g_plane;     // depth = x * px + y * py + z (
 #ifndef PAPER
 layout(location = 4) flat out vec2 g_depth;     // the triangle's depth range
 #endif
-layout(location = 5) flat out int g_axis;
+layout(location = 5) flat out int g_axis;      // 0: project along X, 1: Y, 2: Z
 #ifndef PAPER
-layout(location = 6) flat out float g_coverage;  // the triangle's area over its fragments
-#endif       // 0: project along X, 1: Y, 2: Z
+layout(location = 6) flat out vec4 g_tri01;     // the projected triangle's corners (voxel units)
+layout(location = 7) flat out vec2 g_tri2;
+#endif
 
 // (u, v, depth) for a projection along `axis`, in voxel units.
 vec3 swizzle(vec3 p, int axis) {
@@ -67,14 +68,6 @@ void main() {
 
     vec2 lo = min(min(q[0].xy, q[1].xy), q[2].xy) - 0.5;
     vec2 hi = max(max(q[0].xy, q[1].xy), q[2].xy) + 0.5;
-    // Conservative rasterization gives a triangle of projected area A and extents w x h about
-    // A + w + h + 1 fragments (the area of the triangle grown by a voxel square). Weighted by
-    // A over that, a triangle smaller than a voxel emits its own power, not a voxel's. Larger
-    // triangles keep weight 1: spread evenly, the weight would dim a large emitter's inside.
-    float tri_area = 0.5 * abs(area);
-    vec2 extent = hi - lo - 1.0;
-    float coverage = all(lessThan(extent, vec2(1.0)))
-        ? tri_area / (tri_area + extent.x + extent.y + 1.0) : 1.0;
     float dlo = min(min(q[0].z, q[1].z), q[2].z);
     float dhi = max(max(q[0].z, q[1].z), q[2].z);
 
@@ -98,7 +91,8 @@ void main() {
 #endif
         g_axis = axis;
 #ifndef PAPER
-        g_coverage = coverage;
+        g_tri01 = vec4(q[0].xy, q[1].xy);
+        g_tri2 = q[2].xy;
 #endif
         gl_Position = vec4(v / n * 2.0 - 1.0, 0.5, 1.0);
         EmitVertex();
