@@ -28,7 +28,7 @@ USAGE:
   voxgi reference [SCENE] [--spp N] [--out FILE.exr] [--width W] [--height H] [--seed S]
                   [--sun EL,AZ[,E]]
   voxgi compare A.exr REFERENCE.exr [--exposure EV]
-  voxgi hard-cases [NAME..] [--size N] [--voxels N] [--ref-spp N] [--out FILE.md]
+  voxgi hard-cases [NAME..] [--size N] [--voxels N] [--ref-spp N] [--bounces N] [--out FILE.md]
   voxgi bench SCENE [--sweep SPEC] [--out DIR] [--width W --height H] [--frames N]
               [--warmup N] [--ref-spp N] [--sun EL,AZ[,E]] [--exposure EV] [--validate]
 
@@ -72,9 +72,10 @@ USAGE:
   reference    CPU path-traced ground truth (all cores; --spp default 64, --seed default 0)
   hard-cases   runs the hard cases (light leaks, density, precision, degenerate input,
                extreme lights, cones at the edges; all of them or those named), each with
-               --paper and the defaults at --voxels (default 64) and --size (default 64)
-               pixels, under validation; prints (and writes to --out) the markdown table of
-               docs/hard-cases.md; fails when a default setting misses its goal
+               --paper and the defaults at --voxels (default 64), --size (default 64)
+               pixels and --bounces (default 1), under validation; prints (and writes to
+               --out) the markdown table of docs/hard-cases.md; fails when a default setting
+               misses its goal
   compare      prints one JSON line: relMSE, MAE, RMSE (radiance) and FLIP (display images)
   bench        times each setting of a sweep (per-pass GPU medians and frame wall time over
                --frames, default 10, after --warmup, default 2) and measures its error
@@ -730,6 +731,16 @@ fn hard_cases(args: &Args) -> Result<()> {
             bail!("no hard case {name:?} (the cases: {})", names.join(", "));
         }
     }
+    let default_bounces = voxgi::gi::GiSettings::default().bounces;
+    let bounces = args.number("--bounces", default_bounces)?;
+    if !(1..=voxgi::gi::MAX_BOUNCES).contains(&bounces) {
+        bail!("--bounces must be 1 to {}", voxgi::gi::MAX_BOUNCES);
+    }
+    let default_label = if bounces == default_bounces {
+        "default".to_string()
+    } else {
+        format!("default, {bounces} bounces")
+    };
     let ctx = Context::new(&ContextDesc {
         validate: true,
         device: args.value("--device").map(String::from),
@@ -741,6 +752,7 @@ fn hard_cases(args: &Args) -> Result<()> {
         args.number("--voxels", 64)?,
         args.number("--ref-spp", 256)?,
     )?;
+    env.bounces = bounces;
     let mut rows = Vec::new();
     for case in CASES
         .iter()
@@ -766,7 +778,7 @@ fn hard_cases(args: &Args) -> Result<()> {
             default,
         });
     }
-    let table = hard::table(&rows);
+    let table = hard::table(&rows, &default_label);
     print!("{table}");
     if let Some(out) = args.value("--out") {
         output::write_bytes_atomic(Path::new(out), table.as_bytes())

@@ -57,6 +57,8 @@ fn bad_input_is_a_clear_error_with_no_output() {
         (vec!["render", "--width", "abc", "--out", o], "--width"),
         (vec!["render", "--mode", "sideways", "--out", o], "sideways"),
         (vec!["render", "--bogus"], "--bogus"),
+        (vec!["render", "--bounces", "9", "--out", o], "--bounces"),
+        (vec!["hard-cases", "--bounces", "0"], "--bounces"),
     ] {
         let (ok, _, err) = voxgi(&args);
         assert!(!ok, "{args:?} succeeded");

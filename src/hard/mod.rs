@@ -63,6 +63,8 @@ pub struct Env {
     pub size: u32,
     pub voxels: u32,
     pub ref_spp: u32,
+    /// Light bounces of the default column (the defaults' own unless `--bounces` says).
+    pub bounces: u32,
     scratch: PathBuf,
     /// Non-finite pixels or voxels met by the current case.
     non_finite: Vec<String>,
@@ -101,6 +103,7 @@ impl Env {
             size,
             voxels,
             ref_spp,
+            bounces: GiSettings::default().bounces,
             scratch,
             non_finite: Vec::new(),
             warnings: Vec::new(),
@@ -115,6 +118,7 @@ impl Env {
         } else {
             GiSettings {
                 voxels: self.voxels,
+                bounces: self.bounces,
                 ..GiSettings::default()
             }
         }
@@ -351,10 +355,10 @@ fn cell(o: &Outcome, goal: Goal) -> String {
     format!("{s} {mark}")
 }
 
-/// The markdown table of docs/hard-cases.md.
-pub fn table(rows: &[Row]) -> String {
-    let mut s = String::from(
-        "| case | group | scene and measure | metric | goal | --paper | default |\n\
+/// The markdown table of docs/hard-cases.md; `default` heads the defaults' column.
+pub fn table(rows: &[Row], default: &str) -> String {
+    let mut s = format!(
+        "| case | group | scene and measure | metric | goal | --paper | {default} |\n\
          |---|---|---|---|---|---|---|\n",
     );
     for r in rows {
