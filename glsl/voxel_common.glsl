@@ -8,7 +8,7 @@
 // The squared normals keep the axes a voxel's surfaces face even where opposite normals cancel.
 const uint ACCUM_STRIDE = 10u;
 // Per voxel: emission r g b (scaled by frame.cone.w).
-const uint EMISSION_STRIDE = 4u;  // RGB weighted by coverage, coverage (src/gi/volumes.rs)
+const uint EMISSION_STRIDE = 4u;  // RGB weighted by coverage, emitters' coverage (volumes.rs)
 // 12 fractional bits: a 32-bit sum holds 2^20 fragments of value 1; the quantisation of one
 // fragment (1/4096) is 16 times finer than the paper's 8-bit channels.
 const float FIXED_ONE = 4096.0;

@@ -83,7 +83,8 @@ Voxel load_voxel(ivec3 c) {
             e += uvec3(dynamic_emission[j], dynamic_emission[j + 1u], dynamic_emission[j + 2u]);
             cov += dynamic_emission[j + 3u];
         }
-        // Sum of coverage-weighted emission over the coverage, or over 1 when the surfaces
+
+        // Sum of coverage-weighted emission over the emitters' coverage, or over 1 when they
         // cover less than the voxel (voxelize.frag).
         v.emission = vec3(e) / (max(float(cov) / FIXED_ONE, 1.0) * frame.cone.w);
     }

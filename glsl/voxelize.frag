@@ -123,13 +123,15 @@ void main() {
     uvec3 a = uvec3(round(clamp(base.rgb, 0.0, 1.0) * FIXED_ONE));
     ivec3 nq = ivec3(round(normal * FIXED_ONE));
     uvec3 n2 = uvec3(round(normal * normal * FIXED_ONE));
-    // Emission weighted by coverage, and the coverage summed beside it: a voxel's emission is
-    // the coverage-weighted mean of its surfaces', diluted where they cover less than the voxel
-    // (a triangle smaller than a voxel, or an emitter's edge, emits its own power, not a
-    // voxel's).
+    // Emission weighted by coverage, and the emitters' coverage summed beside it: a voxel's
+    // emission is the coverage-weighted mean of its emitters', diluted where they cover less
+    // than the voxel (a triangle smaller than a voxel, or an emitter's edge, emits its own
+    // power, not a voxel's). Surfaces that emit nothing stay out of the mean: a lamp just under
+    // a ceiling shares its voxels and, lying in front of it, emits at full strength.
     float coverage = (frame.grid_info.w & FLAG_EMISSIVE) != 0u ? pixel_coverage(px) : 0.0;
     uvec3 e = uvec3(round(max(emission, vec3(0.0)) * coverage * frame.cone.w));
-    uint cov = uint(round(coverage * FIXED_ONE));
+    bool emits = any(greaterThan(emission, vec3(0.0)));
+    uint cov = emits ? uint(round(coverage * FIXED_ONE)) : 0u;
     for (int z = z0; z <= z1 && z <= z0 + 2; z++) {
         ivec3 c = unswizzle(ivec3(ivec2(px), z));
         if (!in_grid(c)) continue;

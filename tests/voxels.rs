@@ -260,6 +260,64 @@ fn hdr_emission_survives_unclamped() {
 }
 
 #[test]
+fn an_emitter_against_a_ceiling_keeps_its_emission() {
+    // A lamp 2 mm under a ceiling shares the ceiling's voxels; seen from below it is in front,
+    // so the voxels must emit what it emits, not its mean with the ceiling's nothing.
+    let n = 32;
+    let le = 3.0;
+    let mut s = empty_scene();
+    let m = lambert(&mut s, Vec3::splat(0.5));
+    anchor(&mut s, m);
+    s.materials.push(Material {
+        base_color: glam::Vec4::new(1.0, 1.0, 1.0, 1.0),
+        metallic: 0.0,
+        specular_factor: 0.0,
+        emissive: Vec3::splat(le),
+        ..Material::default()
+    });
+    let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
+    // Both face down; the ceiling is larger than the lamp.
+    let (yc, yl) = (0.55, 0.548);
+    quad(
+        &mut s,
+        [
+            p(0.1, yc, 0.1),
+            p(0.9, yc, 0.1),
+            p(0.9, yc, 0.9),
+            p(0.1, yc, 0.9),
+        ],
+        m,
+    );
+    quad(
+        &mut s,
+        [
+            p(0.3, yl, 0.3),
+            p(0.7, yl, 0.3),
+            p(0.7, yl, 0.7),
+            p(0.3, yl, 0.7),
+        ],
+        1,
+    );
+    let d = render_voxels(&s, voxel_settings(n, false, Mode::VoxelsEmission));
+    let grid = VoxelGrid::fit(&s.bounds, n);
+    let c = |v: f32| ((v - grid.origin.x) / grid.voxel_size()) as u32;
+    // A voxel inside the lamp's square and one beside it under the bare ceiling.
+    let (inside, beside) = (c(0.5), c(0.2));
+    let y = ((yl - grid.origin.y) / grid.voxel_size()) as u32;
+    assert!(
+        d.filled[d.index(inside, y, inside)],
+        "the lamp's voxel is empty"
+    );
+    let e = d.emission[d.index(inside, y, inside)].x;
+    assert!(
+        (e - le).abs() < 0.01 * le,
+        "the lamp's voxel emits {e}, the lamp {le}"
+    );
+    let e = d.emission[d.index(beside, y, beside)].x;
+    assert_eq!(e, 0.0, "the bare ceiling emits {e}");
+}
+
+#[test]
 fn an_emitter_holds_its_own_power_in_the_voxels() {
     // Conservative rasterization gives every voxel a surface touches a fragment; the voxels along
     // an emitter's edges must not emit as if covered whole. Power seen along the projection axis

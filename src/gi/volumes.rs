@@ -7,7 +7,8 @@ use std::sync::Arc;
 
 /// uints per voxel of the default accumulators (glsl/voxel_common.glsl).
 pub const ACCUM_STRIDE: u64 = 10;
-/// Emission sums: RGB weighted by coverage, then the coverage (fixed point, voxelize.frag).
+/// Emission sums: RGB weighted by coverage, then the emitting surfaces' coverage (fixed point,
+/// voxelize.frag).
 pub const EMISSION_STRIDE: u64 = 4;
 
 /// What voxelization writes, per mode.
