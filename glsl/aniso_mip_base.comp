@@ -1,7 +1,8 @@
 #version 450
 // variants: PAPER
 // Anisotropic mipmapping, base level: each texel of the six half-resolution face volumes from a
-// 2x2x2 block of the radiance volume.
+// 2x2x2 block of the radiance volume. PAPER: every voxel shines the same every way. Default: a
+// voxel's light shows in a face volume only as far as it goes that way (facing() below).
 #include "aniso_mip.glsl"
 
 layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
@@ -13,20 +14,57 @@ layout(set = 0, binding = 3, VOLUME_FORMAT) uniform writeonly image3D face_ny;
 layout(set = 0, binding = 4, VOLUME_FORMAT) uniform writeonly image3D face_py;
 layout(set = 0, binding = 5, VOLUME_FORMAT) uniform writeonly image3D face_nz;
 layout(set = 0, binding = 6, VOLUME_FORMAT) uniform writeonly image3D face_pz;
+#ifndef PAPER
+layout(set = 0, binding = 7, rgba8_snorm) uniform readonly image3D emit_dir;
+#endif
+
+// A cone travelling along `face` sees a voxel's light only if the voxel sends it back against
+// the cone's travel (emit_dir, from inject_radiance.comp: where its light goes): fully for
+// directions up to the surface's plane, fading to nothing 30 degrees behind it. The paper's
+// voxels shine every way, so a wall's lit side shows through its back (light leaks) and a
+// cone leaving a surface sees the emitter beside it in the same plane. The opacity stays: a
+// surface blocks light from both sides.
+vec4 facing(vec4 v, vec3 dir, int face) {
+    vec3 towards = vec3(0.0);
+    towards[face / 2] = (face % 2 == 0) ? 1.0 : -1.0;  // against the cone's travel
+    float w = clamp(1.0 + 2.0 * dot(dir, towards), 0.0, 1.0);
+    return vec4(v.rgb * w, v.a);
+}
 
 void main() {
     ivec3 c = ivec3(gl_GlobalInvocationID);
     if (any(greaterThanEqual(c, imageSize(face_nx)))) return;
     vec4 block[8];
+#ifndef PAPER
+    vec3 dirs[8];
+#endif
     for (int i = 0; i < 8; i++) {
         ivec3 s = 2 * c + ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1);
         // Odd sizes: the block's far half lies outside the source and is empty.
-        block[i] = all(lessThan(s, imageSize(radiance))) ? imageLoad(radiance, s) : vec4(0.0);
+        bool inside = all(lessThan(s, imageSize(radiance)));
+        block[i] = inside ? imageLoad(radiance, s) : vec4(0.0);
+#ifndef PAPER
+        dirs[i] = inside ? imageLoad(emit_dir, s).xyz : vec3(0.0);
+#endif
     }
+#ifdef PAPER
     imageStore(face_nx, c, reduce_block(block, 0));
     imageStore(face_px, c, reduce_block(block, 1));
     imageStore(face_ny, c, reduce_block(block, 2));
     imageStore(face_py, c, reduce_block(block, 3));
     imageStore(face_nz, c, reduce_block(block, 4));
     imageStore(face_pz, c, reduce_block(block, 5));
+#else
+    for (int face = 0; face < 6; face++) {
+        vec4 shown[8];
+        for (int i = 0; i < 8; i++) shown[i] = facing(block[i], dirs[i], face);
+        vec4 r = reduce_block(shown, face);
+        if (face == 0) imageStore(face_nx, c, r);
+        else if (face == 1) imageStore(face_px, c, r);
+        else if (face == 2) imageStore(face_ny, c, r);
+        else if (face == 3) imageStore(face_py, c, r);
+        else if (face == 4) imageStore(face_nz, c, r);
+        else imageStore(face_pz, c, r);
+    }
+#endif
 }

@@ -56,6 +56,11 @@ struct ShadowView {
 };
 layout(set = 0, binding = 4, std430) readonly buffer ShadowViews { ShadowView shadow_views[]; };
 
+// Rec. 709 luminance.
+float luminance(vec3 c) {
+    return dot(c, vec3(0.2126, 0.7152, 0.0722));
+}
+
 // Octahedral encoding of unit vectors (two components in [-1, 1]).
 vec2 oct_encode(vec3 n) {
     n /= abs(n.x) + abs(n.y) + abs(n.z);

@@ -18,6 +18,10 @@ layout(set = 1, binding = 4) uniform sampler2DArrayShadow shadow_map;
 layout(set = 1, binding = 5, rgba8) uniform writeonly image3D radiance;
 #else
 layout(set = 1, binding = 5, rgba16f) uniform writeonly image3D radiance;
+// Where the voxel's light goes (aniso_mip_base.comp), in xyz: the surface normal, or for a
+// two-sided voxel (a thin wall, both faces in one voxel) the side the lights fall on; shorter
+// where it spreads (bent surfaces, light on both sides), zero for every way.
+layout(set = 1, binding = 6, rgba8_snorm) uniform writeonly image3D emit_dir;
 #endif
 
 // Visibility of the light by marching the voxels (--voxel-shadows), from two voxels out, one
@@ -48,6 +52,9 @@ void main() {
     Voxel v = load_voxel(c);
     if (!v.filled) {
         imageStore(radiance, c, vec4(0.0));
+#ifndef PAPER
+        imageStore(emit_dir, c, vec4(0.0));
+#endif
         return;
     }
     float vs = voxel_size();
@@ -62,6 +69,8 @@ void main() {
     vec3 w = v.axis_weights;
 
     vec3 irradiance = vec3(0.0);
+    // Two-sided voxels: the lit sides, weighted by the light they reflect.
+    vec3 lit_side = vec3(0.0);
     for (uint i = 0u; i < frame.counts.x; i++) {
         Light light = lights[i];
         vec3 l;
@@ -86,11 +95,17 @@ void main() {
             ? voxel_visibility(q, l, dist)
             : shadow_visibility(light, q, side, shadow_map);
         irradiance += e * n_dot_l * vis;
+        lit_side += luminance(v.albedo * e * n_dot_l * vis) * normalize(w * l + 1e-12);
     }
 #ifdef PAPER
     vec3 outgoing = v.albedo * irradiance + v.emission;
 #else
     vec3 outgoing = v.albedo / PI * irradiance + v.emission;
+    // One-sided: the averaged normal (shorter where the surfaces bend). Two-sided: the sides the
+    // lights fall on; the emission (which side is unknown) goes every way.
+    vec3 dir = two_sided ? lit_side / PI / max(luminance(outgoing), 1e-30)
+                         : v.normal * v.agreement;
+    imageStore(emit_dir, c, vec4(dir, 0.0));
 #endif
     imageStore(radiance, c, vec4(outgoing * frame.tuning.y, 1.0));
 }

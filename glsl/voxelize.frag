@@ -118,6 +118,12 @@ void main() {
     float half_span = 0.5 * (abs(g_plane.x) + abs(g_plane.y));
     float lo = max(depth - half_span, g_depth.x);
     float hi = min(depth + half_span, g_depth.y);
+    // A face lying exactly on a voxel boundary goes to the voxel in front of it, not always to
+    // the one above: the two faces of a zero-thickness wall then fill the voxels of their own
+    // sides instead of sharing one that shines on both.
+    float front = 1e-3 * normal[g_axis];
+    lo += front;
+    hi += front;
     int z0 = int(floor(min(lo, hi)));
     int z1 = int(floor(max(lo, hi)));
     uvec3 a = uvec3(round(clamp(base.rgb, 0.0, 1.0) * FIXED_ONE));

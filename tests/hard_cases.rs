@@ -37,6 +37,11 @@ const MEETS_GOAL: &[&str] = &[
     "no-light",
 ];
 
+/// Open cases that come within 1.5 times their goal: they must stay there (the light leaks,
+/// since voxels send their light only the way their surfaces face: 0.012 at 48x48, 0.02 to
+/// 0.09 before).
+const NEAR_GOAL: &[&str] = &["leak-wall-0", "leak-wall-1cm", "leak-floor-1cm"];
+
 /// One validated context for all cases: lavapipe's instance creation is slow and the cases run
 /// one at a time anyway (each renders at 48x48 and path-traces a reference on both cores).
 static ENV: Mutex<Option<Env>> = Mutex::new(None);
@@ -79,6 +84,18 @@ fn check(name: &str) {
             case.goal
         );
     } else {
+        if NEAR_GOAL.contains(&name) {
+            let bound = match case.goal {
+                voxgi::hard::Goal::AtMost(g) => 1.5 * g,
+            };
+            assert!(
+                default.value <= bound,
+                "{name}: {} {} is more than 1.5 times the goal {}",
+                case.metric,
+                default.value,
+                case.goal
+            );
+        }
         let paper = env.run(case, &env.settings(true));
         if paper.error.is_none() && paper.value.is_finite() {
             assert!(

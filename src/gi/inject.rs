@@ -69,6 +69,9 @@ impl Inject {
         let mut descs = voxel_data_descs(volumes);
         descs.push((4, Desc::Sampled(shadow_map.0, shadow_map.1)));
         descs.push((5, Desc::StorageImage(volumes.radiance.view)));
+        if let Some(dir) = &volumes.emit_dir {
+            descs.push((6, Desc::StorageImage(dir.view)));
+        }
         let set = pool.set(vk::ShaderStageFlags::COMPUTE, &descs)?;
         let shader = if paper {
             "inject_radiance.comp:PAPER"
@@ -92,14 +95,17 @@ impl Inject {
         let d = &ctx.device;
         let n = volumes.grid.resolution;
         let name = format!("inject{suffix}");
-        read_voxel_data(g.pass(&name), volumes)
+        let mut pass = read_voxel_data(g.pass(&name), volumes)
             .image(shadow_map, Access::ComputeSampled)
-            .image(&volumes.radiance, Access::ComputeStorageWrite)
-            .record(|cmd| unsafe {
-                self.pipeline
-                    .bind_compute(d, cmd, &[scene_set, self.set.raw]);
-                let groups = n.div_ceil(4);
-                d.cmd_dispatch(cmd, groups, groups, groups);
-            });
+            .image(&volumes.radiance, Access::ComputeStorageWrite);
+        if let Some(dir) = &volumes.emit_dir {
+            pass = pass.image(dir, Access::ComputeStorageWrite);
+        }
+        pass.record(|cmd| unsafe {
+            self.pipeline
+                .bind_compute(d, cmd, &[scene_set, self.set.raw]);
+            let groups = n.div_ceil(4);
+            d.cmd_dispatch(cmd, groups, groups, groups);
+        });
     }
 }

@@ -26,6 +26,9 @@ impl Mip {
         for (i, f) in volumes.faces.iter().enumerate() {
             descs.push((1 + i as u32, Desc::StorageImage(f.level_view(0))));
         }
+        if let Some(dir) = &volumes.emit_dir {
+            descs.push((7, Desc::StorageImage(dir.view)));
+        }
         let base_set = pool.set(comp, &descs)?;
         let v = |s: &str| {
             if paper {
@@ -90,6 +93,9 @@ impl Mip {
         let mut pass = g
             .pass(&base_name)
             .image(&volumes.radiance, Access::ComputeStorageRead);
+        if let Some(dir) = &volumes.emit_dir {
+            pass = pass.image(dir, Access::ComputeStorageRead);
+        }
         for f in &volumes.faces {
             pass = pass.image(f, Access::ComputeStorageWrite);
         }

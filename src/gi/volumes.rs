@@ -90,6 +90,11 @@ pub struct Volumes {
     pub data: VoxelData,
     /// Outgoing radiance per voxel, premultiplied by opacity (RGBA16F; RGBA8 for --paper).
     pub radiance: Image,
+    /// The direction each voxel sends its light (RGBA8 signed, xyz; length 1: one side only,
+    /// 0: every way); the base mip level shows a voxel's light only in the directional volumes
+    /// of cones it reaches, so that a wall's lit side does not show through its back. None for
+    /// --paper, whose voxels shine every way.
+    pub emit_dir: Option<Image>,
     /// The six directional volumes (-X, +X, -Y, +Y, -Z, +Z) with full mip chains.
     pub faces: Vec<Image>,
     /// Trilinear, transparent black outside the grid.
@@ -181,6 +186,20 @@ impl Volumes {
             name: format!("voxel radiance ({format:?})"),
             bytes: voxels * texel,
         });
+        let emit_dir = if settings.paper {
+            None
+        } else {
+            let desc = ImageDesc::d3(
+                vk::Format::R8G8B8A8_SNORM,
+                n,
+                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+            );
+            info.push(VolumeInfo {
+                name: "voxel light direction (RGBA8 signed)".into(),
+                bytes: voxels * 4,
+            });
+            Some(Image::new(ctx, "voxel light direction", desc)?)
+        };
         let m = grid.aniso_resolution();
         let levels = grid.mip_levels();
         let names = ["-X", "+X", "-Y", "+Y", "-Z", "+Z"];
@@ -228,6 +247,7 @@ impl Volumes {
             grid,
             data,
             radiance,
+            emit_dir,
             faces,
             sampler,
             dummies,
