@@ -131,14 +131,7 @@ fn an_emissive_only_room_lights_its_walls() {
         [c(1., 0., 1.), c(1., 0., -1.), c(1., 2., -1.), c(1., 2., 1.)],
         white,
     );
-    s.materials.push(Material {
-        base_color: glam::Vec4::new(0.0, 0.0, 0.0, 1.0),
-        metallic: 0.0,
-        specular_factor: 0.0,
-        emissive: Vec3::splat(8.0),
-        ..Material::default()
-    });
-    let lamp = s.materials.len() as u32 - 1;
+    let lamp = emitter(&mut s, Vec3::ZERO, Vec3::splat(8.0), false);
     let y = 1.95;
     quad(
         &mut s,
@@ -263,14 +256,7 @@ fn light_from_an_emitter_reaches_the_floor_in_the_right_amount() {
     let mut s = empty_scene();
     let white = lambert(&mut s, Vec3::splat(0.8));
     floor(&mut s, 2.0, white);
-    s.materials.push(Material {
-        base_color: glam::Vec4::new(0.0, 0.0, 0.0, 1.0),
-        metallic: 0.0,
-        specular_factor: 0.0,
-        emissive: Vec3::splat(10.0),
-        ..Material::default()
-    });
-    let lamp = s.materials.len() as u32 - 1;
+    let lamp = emitter(&mut s, Vec3::ZERO, Vec3::splat(10.0), false);
     let (y, h) = (1.0, 0.5);
     quad(
         &mut s,

@@ -19,23 +19,11 @@ fn settings() -> RenderSettings {
     }
 }
 
-fn emitter(s: &mut Scene, radiance: Vec3, double_sided: bool) -> u32 {
-    s.materials.push(Material {
-        base_color: Vec3::ZERO.extend(1.0),
-        metallic: 0.0,
-        specular_factor: 0.0,
-        emissive: radiance,
-        double_sided,
-        ..Material::default()
-    });
-    s.materials.len() as u32 - 1
-}
-
 /// A floor quad facing +Y (or -Y when `down`), seen from above.
 fn emissive_floor(down: bool, double_sided: bool, world: Mat4) -> Scene {
     let mut s = empty_scene();
     let le = Vec3::new(17.0, 3.0, 0.5);
-    let m = emitter(&mut s, le, double_sided);
+    let m = emitter(&mut s, Vec3::ZERO, le, double_sided);
     floor(&mut s, 3.0, m);
     if down {
         let v = &mut s.vertices;

@@ -6,7 +6,7 @@
 mod common;
 mod gpu;
 use glam::{Mat4, Vec3};
-use gpu::{empty_scene, floor, lambert, light, quad, top_camera};
+use gpu::{emitter, empty_scene, floor, lambert, light, quad, top_camera};
 use std::f32::consts::PI;
 use std::path::PathBuf;
 use voxgi::output::RadianceImage;
@@ -21,14 +21,6 @@ fn settings(w: u32, h: u32, spp: u32) -> ReferenceSettings {
         seed: 1,
         ..Default::default()
     }
-}
-
-/// Emissive material: Lambertian `albedo` that also emits `le` from its front faces.
-fn emitter(s: &mut Scene, albedo: Vec3, le: Vec3, double_sided: bool) -> u32 {
-    let m = lambert(s, albedo);
-    s.materials[m as usize].emissive = le;
-    s.materials[m as usize].double_sided = double_sided;
-    m
 }
 
 /// A closed sphere of flat triangles whose front faces (winding and normals) point inwards.

@@ -216,13 +216,7 @@ fn hdr_emission_survives_unclamped() {
     let mut s = empty_scene();
     let m = lambert(&mut s, Vec3::splat(0.5));
     anchor(&mut s, m);
-    s.materials.push(Material {
-        base_color: glam::Vec4::new(0.0, 0.0, 0.0, 1.0),
-        metallic: 0.0,
-        specular_factor: 0.0,
-        emissive: Vec3::new(17.0, 4.0, 0.25),
-        ..Material::default()
-    });
+    emitter(&mut s, Vec3::ZERO, Vec3::new(17.0, 4.0, 0.25), false);
     let y = 0.5;
     quad(
         &mut s,
@@ -268,13 +262,7 @@ fn an_emitter_against_a_ceiling_keeps_its_emission() {
     let mut s = empty_scene();
     let m = lambert(&mut s, Vec3::splat(0.5));
     anchor(&mut s, m);
-    s.materials.push(Material {
-        base_color: glam::Vec4::new(1.0, 1.0, 1.0, 1.0),
-        metallic: 0.0,
-        specular_factor: 0.0,
-        emissive: Vec3::splat(le),
-        ..Material::default()
-    });
+    emitter(&mut s, Vec3::ONE, Vec3::splat(le), false);
     let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
     // Both face down; the ceiling is larger than the lamp.
     let (yc, yl) = (0.55, 0.548);
@@ -329,13 +317,7 @@ fn an_emitter_holds_its_own_power_in_the_voxels() {
         let mut s = empty_scene();
         let m = lambert(&mut s, Vec3::splat(0.5));
         anchor(&mut s, m);
-        s.materials.push(Material {
-            base_color: glam::Vec4::new(0.0, 0.0, 0.0, 1.0),
-            metallic: 0.0,
-            specular_factor: 0.0,
-            emissive: Vec3::splat(le),
-            ..Material::default()
-        });
+        emitter(&mut s, Vec3::ZERO, Vec3::splat(le), false);
         // A square in a plane through y = 0.5, tilted about x (still projected along y).
         let p = |x: f32, z: f32| Vec3::new(x, 0.5 + tilt * (z - 0.5), z);
         quad(&mut s, [p(lo, hi), p(hi, hi), p(hi, lo), p(lo, lo)], 1);

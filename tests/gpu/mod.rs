@@ -56,6 +56,14 @@ pub fn lambert(scene: &mut Scene, albedo: Vec3) -> u32 {
     scene.materials.len() as u32 - 1
 }
 
+/// A Lambertian emitter of albedo `albedo` emitting `le` (from both faces when `double_sided`).
+pub fn emitter(scene: &mut Scene, albedo: Vec3, le: Vec3, double_sided: bool) -> u32 {
+    let m = lambert(scene, albedo);
+    scene.materials[m as usize].emissive = le;
+    scene.materials[m as usize].double_sided = double_sided;
+    m
+}
+
 /// Adds a quad a, b, c, d (counter-clockwise seen from its front) as one instance.
 pub fn quad(scene: &mut Scene, corners: [Vec3; 4], material: u32) {
     let n = (corners[1] - corners[0])
