@@ -69,7 +69,7 @@ void main() {
     vec3 w = v.axis_weights;
 
     vec3 irradiance = vec3(0.0);
-    // Two-sided voxels: the lit sides, weighted by the light they reflect.
+    // Two-sided voxels: the lit sides, weighted by the light they reflect (where the light goes).
     vec3 lit_side = vec3(0.0);
     for (uint i = 0u; i < frame.counts.x; i++) {
         Light light = lights[i];
@@ -95,7 +95,9 @@ void main() {
             ? voxel_visibility(q, l, dist)
             : shadow_visibility(light, q, side, shadow_map);
         irradiance += e * n_dot_l * vis;
-        lit_side += luminance(v.albedo * e * n_dot_l * vis) * normalize(w * l + 1e-12);
+        if (two_sided) {
+            lit_side += luminance(v.albedo * e * n_dot_l * vis) * normalize(w * l + 1e-12);
+        }
     }
 #ifdef PAPER
     vec3 outgoing = v.albedo * irradiance + v.emission;

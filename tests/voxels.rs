@@ -263,29 +263,14 @@ fn an_emitter_against_a_ceiling_keeps_its_emission() {
     let m = lambert(&mut s, Vec3::splat(0.5));
     anchor(&mut s, m);
     emitter(&mut s, Vec3::ONE, Vec3::splat(le), false);
-    let p = |x: f32, y: f32, z: f32| Vec3::new(x, y, z);
     // Both face down; the ceiling is larger than the lamp.
+    let square = |s: &mut Scene, lo: f32, hi: f32, y: f32, material: u32| {
+        let p = |x: f32, z: f32| Vec3::new(x, y, z);
+        quad(s, [p(lo, lo), p(hi, lo), p(hi, hi), p(lo, hi)], material);
+    };
     let (yc, yl) = (0.55, 0.548);
-    quad(
-        &mut s,
-        [
-            p(0.1, yc, 0.1),
-            p(0.9, yc, 0.1),
-            p(0.9, yc, 0.9),
-            p(0.1, yc, 0.9),
-        ],
-        m,
-    );
-    quad(
-        &mut s,
-        [
-            p(0.3, yl, 0.3),
-            p(0.7, yl, 0.3),
-            p(0.7, yl, 0.7),
-            p(0.3, yl, 0.7),
-        ],
-        1,
-    );
+    square(&mut s, 0.1, 0.9, yc, m);
+    square(&mut s, 0.3, 0.7, yl, 1);
     let d = render_voxels(&s, voxel_settings(n, false, Mode::VoxelsEmission));
     let grid = VoxelGrid::fit(&s.bounds, n);
     let c = |v: f32| ((v - grid.origin.x) / grid.voxel_size()) as u32;
