@@ -116,18 +116,9 @@ void main() {
     // Every voxel of this column the triangle's plane crosses within the pixel, clamped to the
     // triangle's own depth range.
     float half_span = 0.5 * (abs(g_plane.x) + abs(g_plane.y));
-    float lo = max(depth - half_span, g_depth.x);
-    float hi = min(depth + half_span, g_depth.y);
-    // A face lying exactly on a voxel boundary goes to the voxel in front of it, not always to
-    // the one above: the two faces of a zero-thickness wall then fill the voxels of their own
-    // sides instead of sharing one that shines on both.
-    float front = 1e-3 * normal[g_axis];
-    lo += front;
-    hi += front;
-    int z0 = int(floor(min(lo, hi)));
-    int z1 = int(floor(max(lo, hi)));
+    float lo0 = max(depth - half_span, g_depth.x);
+    float hi0 = min(depth + half_span, g_depth.y);
     uvec3 a = uvec3(round(clamp(base.rgb, 0.0, 1.0) * FIXED_ONE));
-    ivec3 nq = ivec3(round(normal * FIXED_ONE));
     uvec3 n2 = uvec3(round(normal * normal * FIXED_ONE));
     // Emission weighted by coverage, and the emitters' coverage summed beside it: a voxel's
     // emission is the coverage-weighted mean of its emitters', diluted where they cover less
@@ -138,26 +129,46 @@ void main() {
     uvec3 e = uvec3(round(max(emission, vec3(0.0)) * coverage * frame.cone.w));
     bool emits = any(greaterThan(emission, vec3(0.0)));
     uint cov = emits ? uint(round(coverage * FIXED_ONE)) : 0u;
-    for (int z = z0; z <= z1 && z <= z0 + 2; z++) {
-        ivec3 c = unswizzle(ivec3(ivec2(px), z));
-        if (!in_grid(c)) continue;
-        uint i = voxel_index(c) * ACCUM_STRIDE;
-        atomicAdd(accum[i], 1u);
-        atomicAdd(accum[i + 1u], a.r);
-        atomicAdd(accum[i + 2u], a.g);
-        atomicAdd(accum[i + 3u], a.b);
-        atomicAdd(accum[i + 4u], uint(nq.x));
-        atomicAdd(accum[i + 5u], uint(nq.y));
-        atomicAdd(accum[i + 6u], uint(nq.z));
-        atomicAdd(accum[i + 7u], n2.x);
-        atomicAdd(accum[i + 8u], n2.y);
-        atomicAdd(accum[i + 9u], n2.z);
-        if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u) {
-            uint j = voxel_index(c) * EMISSION_STRIDE;
-            atomicAdd(emission_accum[j], e.r);
-            atomicAdd(emission_accum[j + 1u], e.g);
-            atomicAdd(emission_accum[j + 2u], e.b);
-            atomicAdd(emission_accum[j + 3u], cov);
+    // A double-sided emitter emits from both faces (CONVENTIONS.md), and a voxel sends its
+    // light one way (inject_radiance.comp): each face goes to the voxel on its own side of the
+    // nearest voxel boundary, with its own normal, so the back face's light is not lost (the
+    // Cornell box's lamp, 1 cm under the ceiling, lights the ceiling's gap with its top face).
+    // Other surfaces keep their voxel: splitting them too moves closed meshes half a voxel out
+    // of their surfaces on average (docs/hard-cases.md, "Tried").
+    bool two_faces = m.tex1.z != 0 && emits;
+    float toward = normal[g_axis] >= 0.0 ? 1.0 : -1.0;
+    for (int side = 0; side < (two_faces ? 2 : 1); side++) {
+        float facing = side == 0 ? 1.0 : -1.0;
+        vec3 face_normal = normal * facing;
+        // A face lying exactly on a voxel boundary goes to the voxel in front of it, not always
+        // to the one above: the two faces of a zero-thickness wall then fill the voxels of their
+        // own sides instead of sharing one that shines on both.
+        float shift = two_faces ? 0.5 * facing * toward : 1e-3 * normal[g_axis];
+        float lo = lo0 + shift, hi = hi0 + shift;
+        int z0 = int(floor(min(lo, hi)));
+        int z1 = int(floor(max(lo, hi)));
+        ivec3 nq = ivec3(round(face_normal * FIXED_ONE));
+        for (int z = z0; z <= z1 && z <= z0 + 2; z++) {
+            ivec3 c = unswizzle(ivec3(ivec2(px), z));
+            if (!in_grid(c)) continue;
+            uint i = voxel_index(c) * ACCUM_STRIDE;
+            atomicAdd(accum[i], 1u);
+            atomicAdd(accum[i + 1u], a.r);
+            atomicAdd(accum[i + 2u], a.g);
+            atomicAdd(accum[i + 3u], a.b);
+            atomicAdd(accum[i + 4u], uint(nq.x));
+            atomicAdd(accum[i + 5u], uint(nq.y));
+            atomicAdd(accum[i + 6u], uint(nq.z));
+            atomicAdd(accum[i + 7u], n2.x);
+            atomicAdd(accum[i + 8u], n2.y);
+            atomicAdd(accum[i + 9u], n2.z);
+            if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u) {
+                uint j = voxel_index(c) * EMISSION_STRIDE;
+                atomicAdd(emission_accum[j], e.r);
+                atomicAdd(emission_accum[j + 1u], e.g);
+                atomicAdd(emission_accum[j + 2u], e.b);
+                atomicAdd(emission_accum[j + 3u], cov);
+            }
         }
     }
 #endif

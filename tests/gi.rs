@@ -348,3 +348,49 @@ fn each_bounce_adds_less_light_than_the_one_before() {
         );
     }
 }
+
+#[test]
+fn a_double_sided_emitter_lights_both_of_its_sides() {
+    // The emissive square of the test above, 1 m over the floor, three ways: facing the floor;
+    // facing up but double-sided (CONVENTIONS.md: it emits from both faces, so the floor must
+    // get the same light; it got the one-sided emitter's, 0.19 of it, when the back face's
+    // emission shared the front face's voxel); facing up, one-sided (exactly none of it).
+    let floor_light = |facing_down: bool, double_sided: bool| {
+        let mut s = empty_scene();
+        let white = lambert(&mut s, Vec3::splat(0.8));
+        floor(&mut s, 2.0, white);
+        let lamp = emitter(&mut s, Vec3::ZERO, Vec3::splat(10.0), double_sided);
+        let (y, h) = (1.0, 0.5);
+        let mut corners = [
+            Vec3::new(-h, y, h),
+            Vec3::new(-h, y, -h),
+            Vec3::new(h, y, -h),
+            Vec3::new(h, y, h),
+        ];
+        if !facing_down {
+            corners.reverse();
+        }
+        quad(&mut s, corners, lamp);
+        top_camera(&mut s, 3.0, 60.0);
+        let img = render(&s, settings(Mode::Indirect, 64, 32));
+        assert!(!img.has_non_finite());
+        img.at(26, 16)[0]
+    };
+    let down = floor_light(true, false);
+    let both = floor_light(false, true);
+    let up = floor_light(false, false);
+    eprintln!(
+        "floor radiance: emitter facing it {down}, facing away double-sided {both}, one-sided {up}"
+    );
+    assert!(down > 0.0, "the floor beside the emitter is dark: {down}");
+    assert!(
+        (both - down).abs() < 0.2 * down,
+        "a double-sided emitter facing away lights the floor {both}, facing it {down}"
+    );
+    // Measured 0.19: a voxel's light shows at full strength in the volumes of the directions
+    // along its surface, which tilted cones from below the emitter's plane read too.
+    assert!(
+        up < 0.25 * down,
+        "a one-sided emitter facing away lights the floor {up}"
+    );
+}
