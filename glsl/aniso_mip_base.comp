@@ -16,6 +16,7 @@ layout(set = 0, binding = 5, VOLUME_FORMAT) uniform writeonly image3D face_nz;
 layout(set = 0, binding = 6, VOLUME_FORMAT) uniform writeonly image3D face_pz;
 #ifndef PAPER
 layout(set = 0, binding = 7, rgba8_snorm) uniform readonly image3D emit_dir;
+layout(set = 0, binding = 8, rgba16f) uniform writeonly image3D light_dir;
 #endif
 
 // A cone travelling along `face` sees a voxel's light only if the voxel sends it back against
@@ -55,6 +56,15 @@ void main() {
     imageStore(face_nz, c, reduce_block(block, 4));
     imageStore(face_pz, c, reduce_block(block, 5));
 #else
+    // Where the block's light goes, weighted by its luminance, for cones to see it only from
+    // that side (cone_tracing.glsl): the face volumes, one per axis, cannot tell a cone that
+    // meets a surface from its front from one that comes from behind its plane.
+    vec4 going = vec4(0.0);
+    for (int i = 0; i < 8; i++) {
+        float l = dot(block[i].rgb, vec3(0.2126, 0.7152, 0.0722));  // luminance
+        going += vec4(dirs[i] * l, l);
+    }
+    imageStore(light_dir, c, going * 0.125);
     for (int face = 0; face < 6; face++) {
         vec4 shown[8];
         for (int i = 0; i < 8; i++) shown[i] = facing(block[i], dirs[i], face);

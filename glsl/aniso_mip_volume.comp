@@ -18,6 +18,10 @@ layout(set = 0, binding = 8, VOLUME_FORMAT) uniform writeonly image3D dst_ny;
 layout(set = 0, binding = 9, VOLUME_FORMAT) uniform writeonly image3D dst_py;
 layout(set = 0, binding = 10, VOLUME_FORMAT) uniform writeonly image3D dst_nz;
 layout(set = 0, binding = 11, VOLUME_FORMAT) uniform writeonly image3D dst_pz;
+#ifndef PAPER
+layout(set = 0, binding = 12, rgba16f) uniform readonly image3D src_dir;
+layout(set = 0, binding = 13, rgba16f) uniform writeonly image3D dst_dir;
+#endif
 
 #define REDUCE(SRC, DST, FACE)                                                              \
     for (int i = 0; i < 8; i++) {                                                          \
@@ -36,4 +40,13 @@ void main() {
     REDUCE(src_py, dst_py, 3)
     REDUCE(src_nz, dst_nz, 4)
     REDUCE(src_pz, dst_pz, 5)
+#ifndef PAPER
+    // Where the light goes: the mean of the block's (luminance-weighted) directions.
+    vec4 going = vec4(0.0);
+    for (int i = 0; i < 8; i++) {
+        ivec3 s = 2 * c + ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1);
+        if (all(lessThan(s, imageSize(src_dir)))) going += imageLoad(src_dir, s);
+    }
+    imageStore(dst_dir, c, going * 0.125);
+#endif
 }

@@ -14,6 +14,9 @@ layout(set = CONE_SET, binding = 3) uniform sampler3D aniso_ny;
 layout(set = CONE_SET, binding = 4) uniform sampler3D aniso_py;
 layout(set = CONE_SET, binding = 5) uniform sampler3D aniso_nz;
 layout(set = CONE_SET, binding = 6) uniform sampler3D aniso_pz;
+#ifndef PAPER
+layout(set = CONE_SET, binding = 7) uniform sampler3D light_dir;
+#endif
 
 // The directional volumes seen by a cone travelling along `dir`, weighted by dir^2.
 vec4 sample_directional(vec3 uvw, vec3 dir, float level) {
@@ -23,7 +26,17 @@ vec4 sample_directional(vec3 uvw, vec3 dir, float level) {
     vec4 sx = dir.x < 0.0 ? textureLod(aniso_nx, uvw, level) : textureLod(aniso_px, uvw, level);
     vec4 sy = dir.y < 0.0 ? textureLod(aniso_ny, uvw, level) : textureLod(aniso_py, uvw, level);
     vec4 sz = dir.z < 0.0 ? textureLod(aniso_nz, uvw, level) : textureLod(aniso_pz, uvw, level);
-    return w.x * sx + w.y * sy + w.z * sz;
+    vec4 s = w.x * sx + w.y * sy + w.z * sz;
+#ifndef PAPER
+    // Each face volume shows light going at right angles to its axis, so a cone crossing a
+    // surface's plane from behind would see it through the volumes of the other axes: seen
+    // from behind where its light goes (fading to nothing 30 degrees behind, as for one
+    // voxel in aniso_mip_base.comp), a texel's light is hidden.
+    vec4 going = textureLod(light_dir, uvw, level);
+    vec3 g = going.w > 0.0 ? going.xyz / going.w : vec3(0.0);
+    s.rgb *= clamp(1.0 + 2.0 * dot(g, -dir), 0.0, 1.0);
+#endif
+    return s;
 }
 
 #ifndef PAPER

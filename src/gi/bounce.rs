@@ -25,8 +25,9 @@ fn list_capacity(n: u32) -> u64 {
     (n * n * n).min(64 * n * n)
 }
 
-/// The directional volumes as cones sample them (bindings 1 to 6), with the full-resolution
-/// radiance volume at binding 0 when `full_res`.
+/// The directional volumes as cones sample them (bindings 1 to 6) and where their light goes
+/// (7, except for --paper), with the full-resolution radiance volume at binding 0 when
+/// `full_res`.
 pub fn cone_set(pool: &DescriptorPool, volumes: &Volumes, full_res: bool) -> VkResult<Set> {
     let s = volumes.sampler.raw;
     let mut descs = Vec::new();
@@ -35,6 +36,9 @@ pub fn cone_set(pool: &DescriptorPool, volumes: &Volumes, full_res: bool) -> VkR
     }
     for (i, f) in volumes.faces.iter().enumerate() {
         descs.push((1 + i as u32, Desc::Sampled(f.view, s)));
+    }
+    if let Some(dir) = &volumes.light_dir {
+        descs.push((7, Desc::Sampled(dir.view, s)));
     }
     pool.set(vk::ShaderStageFlags::COMPUTE, &descs)
 }
@@ -109,7 +113,7 @@ impl Bounce {
         let mut pass = read_voxel_data(g.pass(name), volumes)
             .image(&volumes.radiance, Access::ComputeStorageReadWrite)
             .buffer(&self.list, Access::ComputeIndirectRead);
-        for f in &volumes.faces {
+        for f in volumes.faces.iter().chain(&volumes.light_dir) {
             pass = pass.image(f, Access::ComputeSampled);
         }
         pass.record(|cmd| unsafe {

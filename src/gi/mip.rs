@@ -1,5 +1,6 @@
 //! Step 3: anisotropic mipmapping. The radiance volume to six directional volumes at half
-//! resolution, then each of their mip levels from the one before.
+//! resolution, then each of their mip levels from the one before; beside them (not --paper),
+//! where their light goes.
 
 use super::volumes::Volumes;
 use crate::render::pipelines::{self, Desc, DescriptorPool, Pipeline, Set, Spec};
@@ -29,6 +30,9 @@ impl Mip {
         if let Some(dir) = &volumes.emit_dir {
             descs.push((7, Desc::StorageImage(dir.view)));
         }
+        if let Some(dir) = &volumes.light_dir {
+            descs.push((8, Desc::StorageImage(dir.level_view(0))));
+        }
         let base_set = pool.set(comp, &descs)?;
         let v = |s: &str| {
             if paper {
@@ -51,6 +55,10 @@ impl Mip {
             for (i, f) in volumes.faces.iter().enumerate() {
                 descs.push((i as u32, Desc::StorageImage(f.level_view(level - 1))));
                 descs.push((6 + i as u32, Desc::StorageImage(f.level_view(level))));
+            }
+            if let Some(dir) = &volumes.light_dir {
+                descs.push((12, Desc::StorageImage(dir.level_view(level - 1))));
+                descs.push((13, Desc::StorageImage(dir.level_view(level))));
             }
             level_sets.push(pool.set(comp, &descs)?);
         }
@@ -96,7 +104,7 @@ impl Mip {
         if let Some(dir) = &volumes.emit_dir {
             pass = pass.image(dir, Access::ComputeStorageRead);
         }
-        for f in &volumes.faces {
+        for f in volumes.faces.iter().chain(&volumes.light_dir) {
             pass = pass.image(f, Access::ComputeStorageWrite);
         }
         pass.record(|cmd| dispatch(cmd, &self.base, &self.base_set, m));
@@ -106,7 +114,7 @@ impl Mip {
             for (i, set) in self.level_sets.iter().enumerate() {
                 let level = i as u32 + 1;
                 let mut pass = g.pass(&name);
-                for f in &volumes.faces {
+                for f in volumes.faces.iter().chain(&volumes.light_dir) {
                     pass = pass.image(f, Access::ComputeStorageReadWrite);
                 }
                 pass.record(|cmd| dispatch(cmd, p, set, (m >> level).max(1)));

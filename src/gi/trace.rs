@@ -122,7 +122,7 @@ impl Trace {
             p
         };
         pass = pass.image(&volumes.radiance, Access::ComputeSampled);
-        for f in &volumes.faces {
+        for f in volumes.faces.iter().chain(&volumes.light_dir) {
             pass = pass.image(f, Access::ComputeSampled);
         }
         let (p, set, push) = if debug {

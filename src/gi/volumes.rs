@@ -97,6 +97,11 @@ pub struct Volumes {
     pub emit_dir: Option<Image>,
     /// The six directional volumes (-X, +X, -Y, +Y, -Z, +Z) with full mip chains.
     pub faces: Vec<Image>,
+    /// Beside the directional volumes, texel for texel: where their light goes (xyz, the
+    /// voxels' light directions weighted by their luminance) and that weight (w), both divided
+    /// by the voxels averaged. Cones see a texel's light only from the side it goes to. None
+    /// for --paper.
+    pub light_dir: Option<Image>,
     /// Trilinear, transparent black outside the grid.
     pub sampler: Sampler,
     /// Stand-ins for bindings a mode leaves unused, one per binding role so that no two
@@ -221,6 +226,16 @@ impl Volumes {
             name: format!("6 directional volumes, {m}^3 with {levels} mips"),
             bytes: 6 * face_bytes,
         });
+        let light_dir = if settings.paper {
+            None
+        } else {
+            let desc = ImageDesc::d3(vk::Format::R16G16B16A16_SFLOAT, m, usage).mips(levels);
+            info.push(VolumeInfo {
+                name: format!("directional light direction, {m}^3 with {levels} mips"),
+                bytes: face_bytes,
+            });
+            Some(Image::new(ctx, "directional light direction", desc)?)
+        };
         let sampler = Sampler::new(
             ctx,
             &vk::SamplerCreateInfo::default()
@@ -249,6 +264,7 @@ impl Volumes {
             radiance,
             emit_dir,
             faces,
+            light_dir,
             sampler,
             dummies,
             info,
