@@ -292,7 +292,7 @@ fn light_from_an_emitter_reaches_the_floor_in_the_right_amount() {
         let mut set = settings(Mode::Indirect, voxels, size);
         set.gi.bounces = 1;
         let got = render(&s, set).at(px, py)[0];
-        // Measured: +18% at 64^3, -11% at 128^3 (cones blur a small bright emitter).
+        // Measured: +15% at 64^3, -16% at 128^3 (cones blur a small bright emitter).
         assert!(
             (got - want).abs() < 0.3 * want,
             "{voxels}^3: floor radiance {got}, exact {want}"
