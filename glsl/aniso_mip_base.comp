@@ -61,7 +61,8 @@ void main() {
     // meets a surface from its front from one that comes from behind its plane.
     vec4 going = vec4(0.0);
     for (int i = 0; i < 8; i++) {
-        float l = dot(block[i].rgb, vec3(0.2126, 0.7152, 0.0722));  // luminance
+        // Rec. 709 luminance, as common.glsl's luminance() (whose bindings clash with this pass's).
+        float l = dot(block[i].rgb, vec3(0.2126, 0.7152, 0.0722));
         going += vec4(dirs[i] * l, l);
     }
     imageStore(light_dir, c, going * 0.125);
