@@ -7,6 +7,9 @@
 
 #if CONE_FULL_RES
 layout(set = CONE_SET, binding = 0) uniform sampler3D radiance_tex;
+#ifndef PAPER
+layout(set = CONE_SET, binding = 8) uniform sampler3D emit_dir_tex;
+#endif
 #endif
 layout(set = CONE_SET, binding = 1) uniform sampler3D aniso_nx;
 layout(set = CONE_SET, binding = 2) uniform sampler3D aniso_px;
@@ -65,7 +68,13 @@ vec4 sample_cone(vec3 uvw, vec3 dir, float diameter) {
     float level = cone_level(diameter);
     vec4 s = sample_directional(uvw, dir, max(level - 1.0, 0.0));
 #if CONE_FULL_RES
-    if (level < 1.0) s = mix(textureLod(radiance_tex, uvw, 0.0), s, level);
+    if (level < 1.0) {
+        // The full-resolution voxels, seen only from the side their light goes to.
+        vec4 full = textureLod(radiance_tex, uvw, 0.0);
+        vec3 g = textureLod(emit_dir_tex, uvw, 0.0).xyz;
+        full.rgb *= clamp(1.0 + 2.0 * dot(g, -dir), 0.0, 1.0);
+        s = mix(full, s, level);
+    }
 #endif
 #endif
     return s;

@@ -33,6 +33,9 @@ pub fn cone_set(pool: &DescriptorPool, volumes: &Volumes, full_res: bool) -> VkR
     let mut descs = Vec::new();
     if full_res {
         descs.push((0, Desc::Sampled(volumes.radiance.view, s)));
+        if let Some(dir) = &volumes.emit_dir {
+            descs.push((8, Desc::Sampled(dir.view, s)));
+        }
     }
     for (i, f) in volumes.faces.iter().enumerate() {
         descs.push((1 + i as u32, Desc::Sampled(f.view, s)));

@@ -122,6 +122,9 @@ impl Trace {
             p
         };
         pass = pass.image(&volumes.radiance, Access::ComputeSampled);
+        if let Some(dir) = &volumes.emit_dir {
+            pass = pass.image(dir, Access::ComputeSampled);
+        }
         for f in volumes.faces.iter().chain(&volumes.light_dir) {
             pass = pass.image(f, Access::ComputeSampled);
         }

@@ -197,7 +197,9 @@ impl Volumes {
             let desc = ImageDesc::d3(
                 vk::Format::R8G8B8A8_SNORM,
                 n,
-                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+                vk::ImageUsageFlags::STORAGE
+                    | vk::ImageUsageFlags::SAMPLED
+                    | vk::ImageUsageFlags::TRANSFER_SRC,
             );
             info.push(VolumeInfo {
                 name: "voxel light direction (RGBA8 signed)".into(),
