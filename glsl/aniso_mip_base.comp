@@ -28,8 +28,7 @@ layout(set = 0, binding = 8, rgba16f) uniform writeonly image3D light_dir;
 vec4 facing(vec4 v, vec3 dir, int face) {
     vec3 towards = vec3(0.0);
     towards[face / 2] = (face % 2 == 0) ? 1.0 : -1.0;  // against the cone's travel
-    float w = clamp(1.0 + 2.0 * dot(dir, towards), 0.0, 1.0);
-    return vec4(v.rgb * w, v.a);
+    return vec4(v.rgb * seen_from(dir, towards), v.a);
 }
 
 void main() {

@@ -5,6 +5,8 @@
 #ifndef CONE_TRACING_GLSL
 #define CONE_TRACING_GLSL
 
+#include "aniso_mip.glsl"
+
 #if CONE_FULL_RES
 layout(set = CONE_SET, binding = 0) uniform sampler3D radiance_tex;
 #ifndef PAPER
@@ -33,11 +35,9 @@ vec4 sample_directional(vec3 uvw, vec3 dir, float level) {
 #ifndef PAPER
     // Each face volume shows light going at right angles to its axis, so a cone crossing a
     // surface's plane from behind would see it through the volumes of the other axes: seen
-    // from behind where its light goes (fading to nothing 30 degrees behind, as for one
-    // voxel in aniso_mip_base.comp), a texel's light is hidden.
+    // from behind where its light goes, a texel's light is hidden.
     vec4 going = textureLod(light_dir, uvw, level);
-    vec3 g = going.w > 0.0 ? going.xyz / going.w : vec3(0.0);
-    s.rgb *= clamp(1.0 + 2.0 * dot(g, -dir), 0.0, 1.0);
+    s.rgb *= seen_from(going.w > 0.0 ? going.xyz / going.w : vec3(0.0), -dir);
 #endif
     return s;
 }
@@ -71,8 +71,7 @@ vec4 sample_cone(vec3 uvw, vec3 dir, float diameter) {
     if (level < 1.0) {
         // The full-resolution voxels, seen only from the side their light goes to.
         vec4 full = textureLod(radiance_tex, uvw, 0.0);
-        vec3 g = textureLod(emit_dir_tex, uvw, 0.0).xyz;
-        full.rgb *= clamp(1.0 + 2.0 * dot(g, -dir), 0.0, 1.0);
+        full.rgb *= seen_from(textureLod(emit_dir_tex, uvw, 0.0).xyz, -dir);
         s = mix(full, s, level);
     }
 #endif
