@@ -9,7 +9,8 @@ layout(set = 0, binding = 2, std430) buffer EmissionGrid { uint emission_grid[];
 layout(set = 0, binding = 3, std430) readonly buffer StaticFlag { uint static_flag[]; };
 
 void main() {
-    uint i = gl_GlobalInvocationID.x;
+    // Rows of groups (voxelize.rs): a large grid needs more than a dimension's 65535.
+    uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
     if (i >= uint(static_flag.length()) || static_flag[i] != 0u) return;
     albedo_grid[i] = 0u;
     normal_grid[i] = 0u;

@@ -54,7 +54,8 @@ vec3 gather(vec3 p, vec3 n) {
 }
 
 void main() {
-    uint i = gl_GlobalInvocationID.x;
+    // Rows of groups (voxel_list.comp): the list's index runs along x, then y.
+    uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
     if (i >= min(count, uint(coords.length()))) return;
     uint packed = coords[i];
     ivec3 c = ivec3(packed & 1023u, (packed >> 10) & 1023u, packed >> 20);

@@ -39,31 +39,35 @@ Voxel load_voxel(ivec3 c) {
     return v;
 }
 #else
-layout(set = VOXEL_SET, binding = 0, std430) readonly buffer StaticAccum { uint static_accum[]; };
+// Bindings 4 to 6 are the passes' own (shadow map, radiance, voxel list).
+layout(set = VOXEL_SET, binding = 0, std430) readonly buffer StaticAlbedo { uint static_albedo[]; };
 layout(set = VOXEL_SET, binding = 1, std430) readonly buffer StaticEmission { uint static_emission[]; };
-layout(set = VOXEL_SET, binding = 2, std430) readonly buffer DynamicAccum { uint dynamic_accum[]; };
+layout(set = VOXEL_SET, binding = 2, std430) readonly buffer DynamicAlbedo { uint dynamic_albedo[]; };
 layout(set = VOXEL_SET, binding = 3, std430) readonly buffer DynamicEmission { uint dynamic_emission[]; };
+layout(set = VOXEL_SET, binding = 7, std430) readonly buffer StaticNormal { uint static_normal[]; };
+layout(set = VOXEL_SET, binding = 8, std430) readonly buffer DynamicNormal { uint dynamic_normal[]; };
 
 bool voxel_filled(ivec3 c) {
-    uint i = voxel_index(c) * ACCUM_STRIDE;
-    uint count = static_accum[i];
-    if ((frame.grid_info.w & FLAG_DYNAMIC) != 0u) count += dynamic_accum[i];
+    uint i = voxel_index(c) * ALBEDO_STRIDE;
+    uint count = static_albedo[i];
+    if ((frame.grid_info.w & FLAG_DYNAMIC) != 0u) count += dynamic_albedo[i];
     return count > 0u;
 }
 
 Voxel load_voxel(ivec3 c) {
     Voxel v;
-    uint i = voxel_index(c) * ACCUM_STRIDE;
-    uint count = static_accum[i];
-    uvec3 a = uvec3(static_accum[i + 1u], static_accum[i + 2u], static_accum[i + 3u]);
-    ivec3 n = ivec3(static_accum[i + 4u], static_accum[i + 5u], static_accum[i + 6u]);
-    uvec3 n2 = uvec3(static_accum[i + 7u], static_accum[i + 8u], static_accum[i + 9u]);
+    uint i = voxel_index(c) * ALBEDO_STRIDE;
+    uint k = voxel_index(c) * NORMAL_STRIDE;
+    uint count = static_albedo[i];
+    uvec3 a = uvec3(static_albedo[i + 1u], static_albedo[i + 2u], static_albedo[i + 3u]);
+    ivec3 n = ivec3(static_normal[k], static_normal[k + 1u], static_normal[k + 2u]);
+    uvec3 n2 = uvec3(static_normal[k + 3u], static_normal[k + 4u], static_normal[k + 5u]);
     bool dynamic = (frame.grid_info.w & FLAG_DYNAMIC) != 0u;
     if (dynamic) {
-        count += dynamic_accum[i];
-        a += uvec3(dynamic_accum[i + 1u], dynamic_accum[i + 2u], dynamic_accum[i + 3u]);
-        n += ivec3(dynamic_accum[i + 4u], dynamic_accum[i + 5u], dynamic_accum[i + 6u]);
-        n2 += uvec3(dynamic_accum[i + 7u], dynamic_accum[i + 8u], dynamic_accum[i + 9u]);
+        count += dynamic_albedo[i];
+        a += uvec3(dynamic_albedo[i + 1u], dynamic_albedo[i + 2u], dynamic_albedo[i + 3u]);
+        n += ivec3(dynamic_normal[k], dynamic_normal[k + 1u], dynamic_normal[k + 2u]);
+        n2 += uvec3(dynamic_normal[k + 3u], dynamic_normal[k + 4u], dynamic_normal[k + 5u]);
     }
     v.filled = count > 0u;
     float inv = v.filled ? 1.0 / (float(count) * FIXED_ONE) : 0.0;

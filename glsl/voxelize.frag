@@ -38,8 +38,9 @@ RGBA8_AVG(average_albedo, albedo_grid)
 RGBA8_AVG(average_normal, normal_grid)
 RGBA8_AVG(average_emission, emission_grid)
 #else
-layout(set = 2, binding = 0, std430) buffer Accum { uint accum[]; };
+layout(set = 2, binding = 0, std430) buffer AlbedoAccum { uint albedo_accum[]; };
 layout(set = 2, binding = 1, std430) buffer EmissionAccum { uint emission_accum[]; };
+layout(set = 2, binding = 2, std430) buffer NormalAccum { uint normal_accum[]; };
 #endif
 
 #ifndef PAPER
@@ -151,17 +152,18 @@ void main() {
         for (int z = z0; z <= z1 && z <= z0 + 2; z++) {
             ivec3 c = unswizzle(ivec3(ivec2(px), z));
             if (!in_grid(c)) continue;
-            uint i = voxel_index(c) * ACCUM_STRIDE;
-            atomicAdd(accum[i], 1u);
-            atomicAdd(accum[i + 1u], a.r);
-            atomicAdd(accum[i + 2u], a.g);
-            atomicAdd(accum[i + 3u], a.b);
-            atomicAdd(accum[i + 4u], uint(nq.x));
-            atomicAdd(accum[i + 5u], uint(nq.y));
-            atomicAdd(accum[i + 6u], uint(nq.z));
-            atomicAdd(accum[i + 7u], n2.x);
-            atomicAdd(accum[i + 8u], n2.y);
-            atomicAdd(accum[i + 9u], n2.z);
+            uint i = voxel_index(c) * ALBEDO_STRIDE;
+            atomicAdd(albedo_accum[i], 1u);
+            atomicAdd(albedo_accum[i + 1u], a.r);
+            atomicAdd(albedo_accum[i + 2u], a.g);
+            atomicAdd(albedo_accum[i + 3u], a.b);
+            uint k = voxel_index(c) * NORMAL_STRIDE;
+            atomicAdd(normal_accum[k], uint(nq.x));
+            atomicAdd(normal_accum[k + 1u], uint(nq.y));
+            atomicAdd(normal_accum[k + 2u], uint(nq.z));
+            atomicAdd(normal_accum[k + 3u], n2.x);
+            atomicAdd(normal_accum[k + 4u], n2.y);
+            atomicAdd(normal_accum[k + 5u], n2.z);
             if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u) {
                 uint j = voxel_index(c) * EMISSION_STRIDE;
                 atomicAdd(emission_accum[j], e.r);

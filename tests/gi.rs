@@ -394,3 +394,60 @@ fn a_double_sided_emitter_lights_both_of_its_sides() {
         "a one-sided emitter facing away lights the floor {up}"
     );
 }
+
+#[test]
+fn every_voxel_gathers_its_bounce_when_there_are_many() {
+    // The bounce runs one invocation per filled voxel, in rows of 4096 groups of 64
+    // (voxel_list.comp): a stack of 12 double-sided emitting planes at 128^3 fills about 380k
+    // voxels, so the list takes two rows, and each voxel must gather the light of the plane it
+    // faces, in whichever row it lies.
+    let mut s = empty_scene();
+    let m = emitter(&mut s, Vec3::splat(0.5), Vec3::splat(1.0), true);
+    let h = 1.0;
+    for k in 0..12 {
+        let y = -h + (k as f32 + 0.5) * 2.0 * h / 12.0;
+        quad(
+            &mut s,
+            [
+                Vec3::new(-h, y, h),
+                Vec3::new(h, y, h),
+                Vec3::new(h, y, -h),
+                Vec3::new(-h, y, -h),
+            ],
+            m,
+        );
+    }
+    let lit = |bounces: u32| {
+        let mut set = settings(Mode::Full, 128, 8);
+        set.gi.bounces = bounces;
+        render_voxels(&s, set)
+    };
+    let (one, two) = (lit(1), lit(2));
+    let filled: Vec<usize> = (0..one.filled.len()).filter(|&v| one.filled[v]).collect();
+    assert!(filled.len() > 64 * 4096, "{} filled voxels", filled.len());
+    // The top plane's upper face and the bottom one's lower face see nothing.
+    let row = |v: usize| (v / 128) % 128;
+    let (top, bottom) = (
+        filled.iter().map(|&v| row(v)).max().unwrap(),
+        filled.iter().map(|&v| row(v)).min().unwrap(),
+    );
+    let inner: Vec<usize> = filled
+        .iter()
+        .copied()
+        .filter(|&v| row(v) != top && row(v) != bottom)
+        .collect();
+    assert!(inner.len() > 64 * 4096, "{} inner voxels", inner.len());
+    let (r1, r2) = (one.radiance.unwrap(), two.radiance.unwrap());
+    let missed: Vec<usize> = inner
+        .iter()
+        .copied()
+        .filter(|&v| r2[v].y <= r1[v].y)
+        .collect();
+    assert!(
+        missed.is_empty(),
+        "{} of {} voxels gathered nothing, the first {:?}",
+        missed.len(),
+        inner.len(),
+        &missed[..missed.len().min(8)]
+    );
+}

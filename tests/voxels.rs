@@ -331,6 +331,22 @@ fn an_emitter_holds_its_own_power_in_the_voxels() {
 #[test]
 fn dynamic_node_leaves_nothing_behind_and_static_voxels_stay() {
     for paper in [false, true] {
+        moving_node_leaves_nothing_behind(paper, 32, 0.0);
+    }
+}
+
+#[test]
+fn a_dynamic_node_at_the_far_end_of_a_large_paper_grid_leaves_nothing_behind() {
+    // The paper's clear of the dynamic voxels runs one invocation per voxel: 170^3 of them is
+    // more groups than one dimension of a dispatch must allow (65535 x 64 = 4.19M voxels), and
+    // the node sits where the voxel index is beyond that (z near the grid's far end).
+    moving_node_leaves_nothing_behind(true, 170, 0.8);
+}
+
+/// A node voxelized every frame moves across a static floor (voxels n^3, the node in the plane
+/// z = `z`): the voxels at its old place empty and the floor's stay exactly as they were.
+fn moving_node_leaves_nothing_behind(paper: bool, n: u32, z: f32) {
+    {
         let mut s = empty_scene();
         let floor_m = lambert(&mut s, Vec3::splat(0.5));
         let box_m = lambert(&mut s, Vec3::new(0.9, 0.1, 0.1));
@@ -340,17 +356,17 @@ fn dynamic_node_leaves_nothing_behind_and_static_voxels_stay() {
         quad(
             &mut s,
             [
-                Vec3::new(-0.6, 0.3, 0.0),
-                Vec3::new(-0.3, 0.3, 0.0),
-                Vec3::new(-0.3, 0.6, 0.0),
-                Vec3::new(-0.6, 0.6, 0.0),
+                Vec3::new(-0.6, 0.3, z),
+                Vec3::new(-0.3, 0.3, z),
+                Vec3::new(-0.3, 0.6, z),
+                Vec3::new(-0.6, 0.6, z),
             ],
             box_m,
         );
         let node = s.instances[first].node;
         // Bounds that hold both places.
         s.bounds.extend(Vec3::new(1.0, 1.0, 1.0));
-        let mut settings = voxel_settings(32, paper, Mode::VoxelsAlbedo);
+        let mut settings = voxel_settings(n, paper, Mode::VoxelsAlbedo);
         settings.dynamic_nodes = vec![node];
         let ctx = context();
         let stats = ctx.stats.clone();
@@ -419,5 +435,70 @@ fn emissive_strengths_survive_in_the_voxels() {
     assert!(
         (max - strongest).abs() < 0.01 * strongest,
         "brightest voxel {max}, strongest emitter {strongest}"
+    );
+}
+
+#[test]
+fn the_largest_grid_the_device_binds_voxelizes_and_one_more_is_refused() {
+    // 1024^3 needs more than any device binds in one storage buffer (4 GiB at most); the error
+    // names the largest grid that fits, and that grid must work, to the last voxel.
+    let mut s = empty_scene();
+    let white = lambert(&mut s, Vec3::splat(0.8));
+    floor(&mut s, 1.0, white);
+    let lamp = emitter(&mut s, Vec3::ZERO, Vec3::splat(4.0), false);
+    let y = 1.0;
+    quad(
+        &mut s,
+        [
+            Vec3::new(-0.2, y, 0.2),
+            Vec3::new(-0.2, y, -0.2),
+            Vec3::new(0.2, y, -0.2),
+            Vec3::new(0.2, y, 0.2),
+        ],
+        lamp,
+    );
+    let refused = |n: u32| {
+        let ctx = context();
+        match voxgi::render::Renderer::new(&ctx, &s, voxel_settings(n, false, Mode::VoxelsAlbedo)) {
+            Err(voxgi::vk::VkError::GridTooLarge { largest, grid, .. }) => {
+                assert_eq!(grid, n);
+                Some(largest)
+            }
+            Err(e) => panic!("{n}^3: {e}"),
+            Ok(_) => None,
+        }
+    };
+    let largest = refused(1024).expect("1024^3 refused");
+    assert!(largest < 1024, "largest {largest}");
+    assert_eq!(refused(largest + 1), Some(largest), "{}^3", largest + 1);
+    let d = render_voxels(&s, voxel_settings(largest, false, Mode::VoxelsAlbedo));
+    let n = largest as usize;
+    assert_eq!(d.resolution, largest);
+    // The floor spans the grid (less its margin) in x and z: every voxel of that square, up
+    // to the grid's last rows, holds its albedo and normal.
+    let floor_voxels: Vec<usize> = (0..n * n * n)
+        .filter(|&v| d.filled[v] && d.normal[v].y > 0.99)
+        .collect();
+    for &v in &floor_voxels {
+        assert!(
+            (d.albedo[v] - Vec3::splat(0.8)).abs().max_element() < 0.01,
+            "voxel {v}: albedo {}",
+            d.albedo[v]
+        );
+    }
+    let (xs, zs): (Vec<usize>, Vec<usize>) =
+        floor_voxels.iter().map(|&v| (v % n, v / (n * n))).unzip();
+    let span = |c: &[usize]| (*c.iter().min().unwrap(), *c.iter().max().unwrap());
+    let ((x0, x1), (z0, z1)) = (span(&xs), span(&zs));
+    assert!(
+        x1 + 3 >= n && z1 + 3 >= n,
+        "floor up to x {x1}, z {z1} of {n}"
+    );
+    assert_eq!(floor_voxels.len(), (x1 - x0 + 1) * (z1 - z0 + 1));
+    // And the emission sums: the emitter's inner voxels hold its radiance.
+    let brightest = d.emission.iter().map(|e| e.x).fold(0.0f32, f32::max);
+    assert!(
+        (brightest - 4.0).abs() < 0.04,
+        "brightest voxel {brightest}"
     );
 }

@@ -6,23 +6,28 @@ use crate::render::pipelines::{self, Desc, DescriptorPool, Pipeline, Set, SetLay
 use crate::vk::{vk, Access, Context, Graph, Image, VkResult};
 use std::sync::Arc;
 
-/// The voxel data as the compute passes read it (bindings 0 to 3 of glsl/voxel_data.glsl).
+/// The voxel data as the compute passes read it (bindings 0 to 3, 7 and 8 of
+/// glsl/voxel_data.glsl).
 pub fn voxel_data_descs<'a>(volumes: &'a Volumes) -> Vec<(u32, Desc<'a>)> {
     match &volumes.data {
         VoxelData::Sums {
-            static_accum,
+            static_albedo,
+            static_normal,
             static_emission,
-            dynamic_accum,
+            dynamic_albedo,
+            dynamic_normal,
             dynamic_emission,
         } => {
             let or_dummy = |b: &'a Option<crate::vk::Buffer>, i: usize| {
                 Desc::Storage(b.as_ref().unwrap_or(&volumes.dummies[i]))
             };
             vec![
-                (0, Desc::Storage(static_accum)),
+                (0, Desc::Storage(static_albedo)),
                 (1, or_dummy(static_emission, 1)),
-                (2, or_dummy(dynamic_accum, 2)),
+                (2, or_dummy(dynamic_albedo, 2)),
                 (3, or_dummy(dynamic_emission, 3)),
+                (7, Desc::Storage(static_normal)),
+                (8, or_dummy(dynamic_normal, 4)),
             ]
         }
         VoxelData::Paper {

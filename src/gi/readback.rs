@@ -1,7 +1,7 @@
 //! Debug readback of the volumes: what voxelization and injection wrote, decoded on the CPU the
 //! way the shaders decode it (glsl/voxel_data.glsl), for tests and numerical checks.
 
-use super::volumes::{VoxelData, ACCUM_STRIDE, EMISSION_STRIDE};
+use super::volumes::{VoxelData, ALBEDO_STRIDE, EMISSION_STRIDE, NORMAL_STRIDE};
 use super::Gi;
 use crate::vk::{vk, Access, Buffer, Context, Graph, Image, ResourceStates, VkResult};
 use glam::{Vec3, Vec4};
@@ -80,17 +80,23 @@ impl Gi {
         let mut sources: Vec<(&str, Src)> = Vec::new();
         match &self.volumes.data {
             VoxelData::Sums {
-                static_accum,
+                static_albedo,
+                static_normal,
                 static_emission,
-                dynamic_accum,
+                dynamic_albedo,
+                dynamic_normal,
                 dynamic_emission,
             } => {
-                sources.push(("sa", Src::Buf(static_accum)));
+                sources.push(("sa", Src::Buf(static_albedo)));
+                sources.push(("sn", Src::Buf(static_normal)));
                 if let Some(b) = static_emission {
                     sources.push(("se", Src::Buf(b)));
                 }
-                if let Some(b) = dynamic_accum {
+                if let Some(b) = dynamic_albedo {
                     sources.push(("da", Src::Buf(b)));
+                }
+                if let Some(b) = dynamic_normal {
+                    sources.push(("dn", Src::Buf(b)));
                 }
                 if let Some(b) = dynamic_emission {
                     sources.push(("de", Src::Buf(b)));
@@ -200,17 +206,26 @@ impl Gi {
             emission: vec![Vec3::ZERO; nv],
             radiance: None,
         };
-        if let Some(sa) = parts.get("sa") {
-            let sa = words(sa);
+        if let (Some(sa), Some(sn)) = (parts.get("sa"), parts.get("sn")) {
+            let (sa, sn) = (words(sa), words(sn));
             let da = parts.get("da").map(|b| words(b));
+            let dn = parts.get("dn").map(|b| words(b));
             let se = parts.get("se").map(|b| words(b));
             let de = parts.get("de").map(|b| words(b));
-            let stride = ACCUM_STRIDE as usize;
+            let (sa_stride, sn_stride) = (ALBEDO_STRIDE as usize, NORMAL_STRIDE as usize);
             let es = EMISSION_STRIDE as usize;
             for v in 0..nv {
-                let mut w: Vec<u32> = sa[v * stride..(v + 1) * stride].to_vec();
-                if let Some(da) = &da {
-                    for (a, b) in w.iter_mut().zip(&da[v * stride..(v + 1) * stride]) {
+                // The words in the order of glsl/voxel_common.glsl: count, albedo, normal.
+                let mut w: Vec<u32> = sa[v * sa_stride..(v + 1) * sa_stride]
+                    .iter()
+                    .chain(&sn[v * sn_stride..(v + 1) * sn_stride])
+                    .copied()
+                    .collect();
+                if let (Some(da), Some(dn)) = (&da, &dn) {
+                    let d = da[v * sa_stride..(v + 1) * sa_stride]
+                        .iter()
+                        .chain(&dn[v * sn_stride..(v + 1) * sn_stride]);
+                    for (a, b) in w.iter_mut().zip(d) {
                         *a = a.wrapping_add(*b);
                     }
                 }

@@ -5,19 +5,26 @@ use crate::vk::{vk, Buffer, Context, Image, ImageDesc, Sampler, VkError, VkResul
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
-/// uints per voxel of the default accumulators (glsl/voxel_common.glsl).
-pub const ACCUM_STRIDE: u64 = 10;
+/// uints per voxel of the default accumulators (glsl/voxel_common.glsl), split in two buffers
+/// so that a 512^3 grid binds within a 4 GiB maxStorageBufferRange: the count and albedo sums,
+/// and the normal sums.
+pub const ALBEDO_STRIDE: u64 = 4;
+pub const NORMAL_STRIDE: u64 = 6;
 /// Emission sums: RGB weighted by coverage, then the emitting surfaces' coverage (fixed point,
 /// voxelize.frag).
 pub const EMISSION_STRIDE: u64 = 4;
 
 /// What voxelization writes, per mode.
+// One per renderer: the variants' sizes do not matter.
+#[allow(clippy::large_enum_variant)]
 pub enum VoxelData {
     /// Fixed-point sums and counts: static pass, and dynamic pass when there is dynamic geometry.
     Sums {
-        static_accum: Buffer,
+        static_albedo: Buffer,
+        static_normal: Buffer,
         static_emission: Option<Buffer>,
-        dynamic_accum: Option<Buffer>,
+        dynamic_albedo: Option<Buffer>,
+        dynamic_normal: Option<Buffer>,
         dynamic_emission: Option<Buffer>,
     },
     /// The paper's RGBA8 moving averages (one r32ui word per voxel), and its static flags.
@@ -34,13 +41,20 @@ impl VoxelData {
     pub fn written_by(&self, dynamic: bool) -> Vec<&Buffer> {
         match self {
             VoxelData::Sums {
-                static_accum,
+                static_albedo,
+                static_normal,
                 static_emission,
-                dynamic_accum,
+                dynamic_albedo,
+                dynamic_normal,
                 dynamic_emission,
             } => match dynamic {
-                true => dynamic_accum.iter().chain(dynamic_emission).collect(),
-                false => std::iter::once(static_accum)
+                true => dynamic_albedo
+                    .iter()
+                    .chain(dynamic_normal)
+                    .chain(dynamic_emission)
+                    .collect(),
+                false => [static_albedo, static_normal]
+                    .into_iter()
                     .chain(static_emission)
                     .collect(),
             },
@@ -106,7 +120,7 @@ pub struct Volumes {
     pub sampler: Sampler,
     /// Stand-ins for bindings a mode leaves unused, one per binding role so that no two
     /// bindings of a pass alias the same buffer.
-    pub dummies: [Buffer; 4],
+    pub dummies: [Buffer; 5],
     pub info: Vec<VolumeInfo>,
 }
 
@@ -125,23 +139,31 @@ impl Volumes {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
             | vk::BufferUsageFlags::TRANSFER_SRC;
+        // Checked before allocating anything: a larger buffer allocates, then fails validation
+        // (or reads garbage) when bound. The widest buffer of the mode sets the largest grid.
         let limit = ctx.properties.limits.max_storage_buffer_range as u64;
+        let (widest, stride) = if settings.paper {
+            ("voxel albedo (RGBA8 words)", 1)
+        } else {
+            (
+                "static voxel normal sums",
+                NORMAL_STRIDE.max(ALBEDO_STRIDE).max(EMISSION_STRIDE),
+            )
+        };
+        if voxels * stride * 4 > limit {
+            let largest = (1..=n)
+                .rev()
+                .find(|&k| (k as u64).pow(3) * stride * 4 <= limit)
+                .unwrap_or(1);
+            return Err(VkError::GridTooLarge {
+                grid: n,
+                what: widest.into(),
+                bytes: voxels * stride * 4,
+                limit,
+                largest,
+            });
+        }
         let mut buffer = |name: &str, stride: u64| -> VkResult<Buffer> {
-            // Checked before allocating: a larger buffer allocates, then fails validation (or
-            // reads garbage) when bound.
-            if voxels * stride * 4 > limit {
-                let largest = (1..=n)
-                    .rev()
-                    .find(|&k| (k as u64).pow(3) * stride * 4 <= limit)
-                    .unwrap_or(1);
-                return Err(VkError::GridTooLarge {
-                    grid: n,
-                    what: name.into(),
-                    bytes: voxels * stride * 4,
-                    limit,
-                    largest,
-                });
-            }
             info.push(VolumeInfo {
                 name: name.into(),
                 bytes: voxels * stride * 4,
@@ -165,12 +187,16 @@ impl Volumes {
             }
         } else {
             VoxelData::Sums {
-                static_accum: buffer("static voxel sums", ACCUM_STRIDE)?,
+                static_albedo: buffer("static voxel counts and albedo sums", ALBEDO_STRIDE)?,
+                static_normal: buffer("static voxel normal sums", NORMAL_STRIDE)?,
                 static_emission: emissive
                     .then(|| buffer("static emission sums", EMISSION_STRIDE))
                     .transpose()?,
-                dynamic_accum: dynamic
-                    .then(|| buffer("dynamic voxel sums", ACCUM_STRIDE))
+                dynamic_albedo: dynamic
+                    .then(|| buffer("dynamic voxel counts and albedo sums", ALBEDO_STRIDE))
+                    .transpose()?,
+                dynamic_normal: dynamic
+                    .then(|| buffer("dynamic voxel normal sums", NORMAL_STRIDE))
                     .transpose()?,
                 dynamic_emission: (dynamic && emissive)
                     .then(|| buffer("dynamic emission sums", EMISSION_STRIDE))
@@ -259,7 +285,7 @@ impl Volumes {
                 MemoryLocation::GpuOnly,
             )
         };
-        let dummies = [dummy(0)?, dummy(1)?, dummy(2)?, dummy(3)?];
+        let dummies = [dummy(0)?, dummy(1)?, dummy(2)?, dummy(3)?, dummy(4)?];
         Ok(Volumes {
             grid,
             data,

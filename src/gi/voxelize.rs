@@ -32,28 +32,31 @@ impl Voxelizer {
         let frag = vk::ShaderStageFlags::FRAGMENT;
         let (static_target, dynamic_target, clear_dynamic) = match &volumes.data {
             VoxelData::Sums {
-                static_accum,
+                static_albedo,
+                static_normal,
                 static_emission,
-                dynamic_accum,
+                dynamic_albedo,
+                dynamic_normal,
                 dynamic_emission,
             } => {
-                let target = |accum, emission: &'a Option<Buffer>| {
+                let target = |albedo, normal, emission: &'a Option<Buffer>| {
                     pool.set(
                         frag,
                         &[
-                            (0, Desc::Storage(accum)),
+                            (0, Desc::Storage(albedo)),
                             (
                                 1,
                                 Desc::Storage(emission.as_ref().unwrap_or(&volumes.dummies[1])),
                             ),
+                            (2, Desc::Storage(normal)),
                         ],
                     )
                 };
-                let s = target(static_accum, static_emission)?;
-                let d = dynamic_accum
-                    .as_ref()
-                    .map(|a| target(a, dynamic_emission))
-                    .transpose()?;
+                let s = target(static_albedo, static_normal, static_emission)?;
+                let d = match (dynamic_albedo, dynamic_normal) {
+                    (Some(a), Some(n)) => Some(target(a, n, dynamic_emission)?),
+                    _ => None,
+                };
                 (s, d, None)
             }
             VoxelData::Paper {
@@ -200,7 +203,9 @@ impl Voxelizer {
                         &[set.raw],
                         &[],
                     );
-                    d.cmd_dispatch(cmd, (n * n * n).div_ceil(64), 1, 1);
+                    // In rows: 65535 groups is all a dimension must allow (162^3 voxels).
+                    let groups = (n * n * n).div_ceil(64);
+                    d.cmd_dispatch(cmd, groups.min(4096), groups.div_ceil(4096), 1);
                 });
             }
             _ => {
