@@ -154,13 +154,22 @@ impl VoxelGrid {
     pub fn voxel_size(&self) -> f32 {
         self.size / self.resolution as f32
     }
-    /// Texels per side of the directional volumes' base level (half the grid, rounded up).
-    pub fn aniso_resolution(&self) -> u32 {
-        self.resolution.div_ceil(2)
+    /// Texels per side of the directional volumes' base level: half the grid, rounded up, and
+    /// then (except for --paper) up to a power of two. A mip level of odd size drops its last
+    /// texel (Vulkan rounds mip sizes down), and the levels after it no longer line up with
+    /// the grid: their texels hold blocks of the level before that the sampler puts up to a
+    /// texel away.
+    pub fn aniso_resolution(&self, paper: bool) -> u32 {
+        let m = self.resolution.div_ceil(2);
+        if paper {
+            m
+        } else {
+            m.next_power_of_two()
+        }
     }
     /// Mip levels of the directional volumes (their base level down to 1 texel).
-    pub fn mip_levels(&self) -> u32 {
-        32 - self.aniso_resolution().leading_zeros()
+    pub fn mip_levels(&self, paper: bool) -> u32 {
+        32 - self.aniso_resolution(paper).leading_zeros()
     }
 }
 
@@ -273,14 +282,14 @@ impl Gi {
                 },
                 vk::DescriptorPoolSize {
                     ty: vk::DescriptorType::STORAGE_IMAGE,
-                    descriptor_count: 32 + 12 * grid.mip_levels(),
+                    descriptor_count: 32 + 12 * grid.mip_levels(settings.paper),
                 },
                 vk::DescriptorPoolSize {
                     ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
                     descriptor_count: 64,
                 },
             ],
-            16 + grid.mip_levels(),
+            16 + grid.mip_levels(settings.paper),
         )?;
         let paper = settings.paper;
         let voxelizer = Voxelizer::new(
@@ -376,6 +385,9 @@ impl Gi {
                 .record(ctx, g, &self.volumes, gpu, true, draw_dynamic);
         }
         if let Some((inject, mip)) = &self.lighting {
+            if self.static_dirty {
+                mip.record_clear_padding(ctx, g, &self.volumes);
+            }
             inject.record(ctx, g, &self.volumes, scene_set, shadow_map, "");
             mip.record(ctx, g, &self.volumes, "");
             if let Some(b) = &self.bounce {
@@ -459,7 +471,36 @@ mod tests {
         assert!((g.origin + g.size)
             .cmpge(b.max + g.voxel_size() * 0.99)
             .all());
-        assert_eq!(VoxelGrid::fit(&b, 8).mip_levels(), 3); // 4, 2, 1
-        assert_eq!(VoxelGrid::fit(&b, 37).mip_levels(), 5); // 19, 9, 4, 2, 1
+        assert_eq!(VoxelGrid::fit(&b, 8).mip_levels(false), 3); // 4, 2, 1
+        assert_eq!(VoxelGrid::fit(&b, 37).mip_levels(true), 5); // 19, 9, 4, 2, 1
+                                                                // Padded to 32: 32, 16, 8, 4, 2, 1, each level exactly half the one before.
+        assert_eq!(VoxelGrid::fit(&b, 37).aniso_resolution(false), 32);
+        assert_eq!(VoxelGrid::fit(&b, 37).mip_levels(false), 6);
+        assert_eq!(VoxelGrid::fit(&b, 64).aniso_resolution(false), 32);
+    }
+
+    #[test]
+    fn every_mip_level_lines_up_with_the_grid() {
+        // The sampler puts texel i of level L (of m_L texels) at (i + 0.5) / m_L; the mip pass
+        // fills it with base texels [i 2^L, (i + 1) 2^L), whose centre lies at
+        // (i + 0.5) 2^L / m_0. They agree for every i when m_L 2^L = m_0.
+        let b = Aabb {
+            min: Vec3::ZERO,
+            max: Vec3::ONE,
+        };
+        for n in 2..=600 {
+            let g = VoxelGrid::fit(&b, n);
+            let m = g.aniso_resolution(false);
+            assert!(2 * m >= n, "{n}^3: {m} texels do not cover the grid");
+            for level in 0..g.mip_levels(false) {
+                let size = (m >> level).max(1);
+                assert_eq!(
+                    size << level,
+                    m,
+                    "{n}^3, level {level}: {size} texels of {m}"
+                );
+            }
+            assert_eq!(m >> (g.mip_levels(false) - 1), 1, "{n}^3 ends at one texel");
+        }
     }
 }

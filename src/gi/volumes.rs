@@ -209,9 +209,11 @@ impl Volumes {
         } else {
             (vk::Format::R16G16B16A16_SFLOAT, 8)
         };
+        // TRANSFER_DST: the directional volumes' padding is cleared (mip.rs).
         let usage = vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::SAMPLED
-            | vk::ImageUsageFlags::TRANSFER_SRC;
+            | vk::ImageUsageFlags::TRANSFER_SRC
+            | vk::ImageUsageFlags::TRANSFER_DST;
         let radiance = Image::new(ctx, "voxel radiance", ImageDesc::d3(format, n, usage))?;
         info.push(VolumeInfo {
             name: format!("voxel radiance ({format:?})"),
@@ -233,8 +235,8 @@ impl Volumes {
             });
             Some(Image::new(ctx, "voxel light direction", desc)?)
         };
-        let m = grid.aniso_resolution();
-        let levels = grid.mip_levels();
+        let m = grid.aniso_resolution(settings.paper);
+        let levels = grid.mip_levels(settings.paper);
         let names = ["-X", "+X", "-Y", "+Y", "-Z", "+Z"];
         let faces = names
             .iter()
