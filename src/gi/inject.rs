@@ -11,23 +11,19 @@ use std::sync::Arc;
 pub fn voxel_data_descs<'a>(volumes: &'a Volumes) -> Vec<(u32, Desc<'a>)> {
     match &volumes.data {
         VoxelData::Sums {
-            static_albedo,
-            static_normal,
-            static_emission,
-            dynamic_albedo,
-            dynamic_normal,
-            dynamic_emission,
+            static_sums: s,
+            dynamic_sums: d,
         } => {
-            let or_dummy = |b: &'a Option<crate::vk::Buffer>, i: usize| {
-                Desc::Storage(b.as_ref().unwrap_or(&volumes.dummies[i]))
+            let or_dummy = |b: Option<&'a crate::vk::Buffer>, i: usize| {
+                Desc::Storage(b.unwrap_or(&volumes.dummies[i]))
             };
             vec![
-                (0, Desc::Storage(static_albedo)),
-                (1, or_dummy(static_emission, 1)),
-                (2, or_dummy(dynamic_albedo, 2)),
-                (3, or_dummy(dynamic_emission, 3)),
-                (7, Desc::Storage(static_normal)),
-                (8, or_dummy(dynamic_normal, 4)),
+                (0, Desc::Storage(&s.albedo)),
+                (1, or_dummy(s.emission.as_ref(), 1)),
+                (2, or_dummy(d.as_ref().map(|d| &d.albedo), 2)),
+                (3, or_dummy(d.as_ref().and_then(|d| d.emission.as_ref()), 3)),
+                (7, Desc::Storage(&s.normal)),
+                (8, or_dummy(d.as_ref().map(|d| &d.normal), 4)),
             ]
         }
         VoxelData::Paper {

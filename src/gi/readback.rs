@@ -80,26 +80,20 @@ impl Gi {
         let mut sources: Vec<(&str, Src)> = Vec::new();
         match &self.volumes.data {
             VoxelData::Sums {
-                static_albedo,
-                static_normal,
-                static_emission,
-                dynamic_albedo,
-                dynamic_normal,
-                dynamic_emission,
+                static_sums,
+                dynamic_sums,
             } => {
-                sources.push(("sa", Src::Buf(static_albedo)));
-                sources.push(("sn", Src::Buf(static_normal)));
-                if let Some(b) = static_emission {
-                    sources.push(("se", Src::Buf(b)));
-                }
-                if let Some(b) = dynamic_albedo {
-                    sources.push(("da", Src::Buf(b)));
-                }
-                if let Some(b) = dynamic_normal {
-                    sources.push(("dn", Src::Buf(b)));
-                }
-                if let Some(b) = dynamic_emission {
-                    sources.push(("de", Src::Buf(b)));
+                let passes = [
+                    (["sa", "sn", "se"], Some(static_sums)),
+                    (["da", "dn", "de"], dynamic_sums.as_deref()),
+                ];
+                for ([a, n, e], sums) in passes {
+                    let Some(sums) = sums else { continue };
+                    sources.push((a, Src::Buf(&sums.albedo)));
+                    sources.push((n, Src::Buf(&sums.normal)));
+                    if let Some(b) = &sums.emission {
+                        sources.push((e, Src::Buf(b)));
+                    }
                 }
             }
             VoxelData::Paper {

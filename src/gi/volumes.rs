@@ -14,18 +14,30 @@ pub const NORMAL_STRIDE: u64 = 6;
 /// voxelize.frag).
 pub const EMISSION_STRIDE: u64 = 4;
 
+/// The default's fixed-point sums of one voxelization pass (static or dynamic).
+pub struct Sums {
+    /// Count, then albedo r g b (ALBEDO_STRIDE words a voxel).
+    pub albedo: Buffer,
+    /// Normal, then squared normal (NORMAL_STRIDE words a voxel).
+    pub normal: Buffer,
+    /// When the scene emits (EMISSION_STRIDE words a voxel).
+    pub emission: Option<Buffer>,
+}
+
+impl Sums {
+    fn buffers(&self) -> impl Iterator<Item = &Buffer> {
+        [&self.albedo, &self.normal]
+            .into_iter()
+            .chain(&self.emission)
+    }
+}
+
 /// What voxelization writes, per mode.
-// One per renderer: the variants' sizes do not matter.
-#[allow(clippy::large_enum_variant)]
 pub enum VoxelData {
     /// Fixed-point sums and counts: static pass, and dynamic pass when there is dynamic geometry.
     Sums {
-        static_albedo: Buffer,
-        static_normal: Buffer,
-        static_emission: Option<Buffer>,
-        dynamic_albedo: Option<Buffer>,
-        dynamic_normal: Option<Buffer>,
-        dynamic_emission: Option<Buffer>,
+        static_sums: Sums,
+        dynamic_sums: Option<Box<Sums>>,
     },
     /// The paper's RGBA8 moving averages (one r32ui word per voxel), and its static flags.
     Paper {
@@ -41,22 +53,11 @@ impl VoxelData {
     pub fn written_by(&self, dynamic: bool) -> Vec<&Buffer> {
         match self {
             VoxelData::Sums {
-                static_albedo,
-                static_normal,
-                static_emission,
-                dynamic_albedo,
-                dynamic_normal,
-                dynamic_emission,
+                static_sums,
+                dynamic_sums,
             } => match dynamic {
-                true => dynamic_albedo
-                    .iter()
-                    .chain(dynamic_normal)
-                    .chain(dynamic_emission)
-                    .collect(),
-                false => [static_albedo, static_normal]
-                    .into_iter()
-                    .chain(static_emission)
-                    .collect(),
+                true => dynamic_sums.iter().flat_map(|s| s.buffers()).collect(),
+                false => static_sums.buffers().collect(),
             },
             // The paper's passes share its volumes; the dynamic one reads the flags.
             VoxelData::Paper {
@@ -186,21 +187,21 @@ impl Volumes {
                 flag: dynamic.then(|| buffer("static flags", 1)).transpose()?,
             }
         } else {
+            let mut sums = |pass: &str| -> VkResult<Sums> {
+                Ok(Sums {
+                    albedo: buffer(
+                        &format!("{pass} voxel counts and albedo sums"),
+                        ALBEDO_STRIDE,
+                    )?,
+                    normal: buffer(&format!("{pass} voxel normal sums"), NORMAL_STRIDE)?,
+                    emission: emissive
+                        .then(|| buffer(&format!("{pass} emission sums"), EMISSION_STRIDE))
+                        .transpose()?,
+                })
+            };
             VoxelData::Sums {
-                static_albedo: buffer("static voxel counts and albedo sums", ALBEDO_STRIDE)?,
-                static_normal: buffer("static voxel normal sums", NORMAL_STRIDE)?,
-                static_emission: emissive
-                    .then(|| buffer("static emission sums", EMISSION_STRIDE))
-                    .transpose()?,
-                dynamic_albedo: dynamic
-                    .then(|| buffer("dynamic voxel counts and albedo sums", ALBEDO_STRIDE))
-                    .transpose()?,
-                dynamic_normal: dynamic
-                    .then(|| buffer("dynamic voxel normal sums", NORMAL_STRIDE))
-                    .transpose()?,
-                dynamic_emission: (dynamic && emissive)
-                    .then(|| buffer("dynamic emission sums", EMISSION_STRIDE))
-                    .transpose()?,
+                static_sums: sums("static")?,
+                dynamic_sums: dynamic.then(|| sums("dynamic").map(Box::new)).transpose()?,
             }
         };
 

@@ -1,7 +1,7 @@
 //! Step 1: voxelization. Static geometry is voxelized once (again when a static node moves);
 //! dynamic geometry is cleared and voxelized every frame while static voxels stay.
 
-use super::volumes::{Volumes, VoxelData};
+use super::volumes::{Sums, Volumes, VoxelData};
 use crate::render::pipelines::{
     self, Desc, DescriptorPool, GraphicsDesc, Pipeline, Set, SetLayout, Spec,
 };
@@ -32,31 +32,22 @@ impl Voxelizer {
         let frag = vk::ShaderStageFlags::FRAGMENT;
         let (static_target, dynamic_target, clear_dynamic) = match &volumes.data {
             VoxelData::Sums {
-                static_albedo,
-                static_normal,
-                static_emission,
-                dynamic_albedo,
-                dynamic_normal,
-                dynamic_emission,
+                static_sums,
+                dynamic_sums,
             } => {
-                let target = |albedo, normal, emission: &'a Option<Buffer>| {
+                let target = |sums: &'a Sums| {
+                    let emission = sums.emission.as_ref().unwrap_or(&volumes.dummies[1]);
                     pool.set(
                         frag,
                         &[
-                            (0, Desc::Storage(albedo)),
-                            (
-                                1,
-                                Desc::Storage(emission.as_ref().unwrap_or(&volumes.dummies[1])),
-                            ),
-                            (2, Desc::Storage(normal)),
+                            (0, Desc::Storage(&sums.albedo)),
+                            (1, Desc::Storage(emission)),
+                            (2, Desc::Storage(&sums.normal)),
                         ],
                     )
                 };
-                let s = target(static_albedo, static_normal, static_emission)?;
-                let d = match (dynamic_albedo, dynamic_normal) {
-                    (Some(a), Some(n)) => Some(target(a, n, dynamic_emission)?),
-                    _ => None,
-                };
+                let s = target(static_sums)?;
+                let d = dynamic_sums.as_deref().map(target).transpose()?;
                 (s, d, None)
             }
             VoxelData::Paper {
