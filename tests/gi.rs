@@ -253,21 +253,8 @@ fn a_node_moving_every_frame_stays_clean() {
 fn light_from_an_emitter_reaches_the_floor_in_the_right_amount() {
     // An emissive square (Le = 10) 1 m above a white floor, seen from above; the floor beside it
     // gets only the emitter's light, by cones. Compared with the exact irradiance.
-    let mut s = empty_scene();
-    let white = lambert(&mut s, Vec3::splat(0.8));
-    floor(&mut s, 2.0, white);
-    let lamp = emitter(&mut s, Vec3::ZERO, Vec3::splat(10.0), false);
     let (y, h) = (1.0, 0.5);
-    quad(
-        &mut s,
-        [
-            Vec3::new(-h, y, h),
-            Vec3::new(-h, y, -h),
-            Vec3::new(h, y, -h),
-            Vec3::new(h, y, h),
-        ],
-        lamp,
-    );
+    let mut s = lamp_over_floor(2.0, h, y, 10.0);
     top_camera(&mut s, 3.0, 60.0);
     let size = 32;
     let (px, py) = (26, 16);

@@ -442,21 +442,7 @@ fn emissive_strengths_survive_in_the_voxels() {
 fn the_largest_grid_the_device_binds_voxelizes_and_one_more_is_refused() {
     // 1024^3 needs more than any device binds in one storage buffer (4 GiB at most); the error
     // names the largest grid that fits, and that grid must work, to the last voxel.
-    let mut s = empty_scene();
-    let white = lambert(&mut s, Vec3::splat(0.8));
-    floor(&mut s, 1.0, white);
-    let lamp = emitter(&mut s, Vec3::ZERO, Vec3::splat(4.0), false);
-    let y = 1.0;
-    quad(
-        &mut s,
-        [
-            Vec3::new(-0.2, y, 0.2),
-            Vec3::new(-0.2, y, -0.2),
-            Vec3::new(0.2, y, -0.2),
-            Vec3::new(0.2, y, 0.2),
-        ],
-        lamp,
-    );
+    let s = lamp_over_floor(1.0, 0.2, 1.0, 4.0);
     let refused = |n: u32| {
         let ctx = context();
         match voxgi::render::Renderer::new(&ctx, &s, voxel_settings(n, false, Mode::VoxelsAlbedo)) {

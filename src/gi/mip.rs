@@ -85,7 +85,7 @@ impl Mip {
     /// the coarser levels and the cones' samples at the grid's edge read these as empty.
     /// Needed once, before the first mip pass; nothing else writes there.
     pub fn record_clear_padding(&self, ctx: &Context, g: &mut Graph, volumes: &Volumes) {
-        if volumes.faces[0].desc.extent.width == volumes.grid.resolution.div_ceil(2) {
+        if volumes.faces[0].desc.extent.width == volumes.grid.texels_over_grid() {
             return;
         }
         let d = &ctx.device;
@@ -113,7 +113,7 @@ impl Mip {
         let d = &ctx.device;
         // Texels over the grid, at the base level and then each level: those past it (a padded
         // base level) stay as record_clear_padding left them.
-        let m = volumes.grid.resolution.div_ceil(2);
+        let m = volumes.grid.texels_over_grid();
         let dispatch = |cmd, p: &Pipeline, set: &Set, size: u32| unsafe {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, p.raw);
             d.cmd_bind_descriptor_sets(

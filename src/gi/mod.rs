@@ -160,12 +160,17 @@ impl VoxelGrid {
     /// the grid: their texels hold blocks of the level before that the sampler puts up to a
     /// texel away.
     pub fn aniso_resolution(&self, paper: bool) -> u32 {
-        let m = self.resolution.div_ceil(2);
+        let m = self.texels_over_grid();
         if paper {
             m
         } else {
             m.next_power_of_two()
         }
+    }
+    /// Texels of the directional volumes' base level that hold the grid (half of it, rounded
+    /// up): all of them for --paper, the rest is padding.
+    pub fn texels_over_grid(&self) -> u32 {
+        self.resolution.div_ceil(2)
     }
     /// Mip levels of the directional volumes (their base level down to 1 texel).
     pub fn mip_levels(&self, paper: bool) -> u32 {

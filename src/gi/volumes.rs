@@ -210,11 +210,11 @@ impl Volumes {
         } else {
             (vk::Format::R16G16B16A16_SFLOAT, 8)
         };
-        // TRANSFER_DST: the directional volumes' padding is cleared (mip.rs).
         let usage = vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::SAMPLED
-            | vk::ImageUsageFlags::TRANSFER_SRC
-            | vk::ImageUsageFlags::TRANSFER_DST;
+            | vk::ImageUsageFlags::TRANSFER_SRC;
+        // The directional volumes' padding is cleared (mip.rs).
+        let padded_usage = usage | vk::ImageUsageFlags::TRANSFER_DST;
         let radiance = Image::new(ctx, "voxel radiance", ImageDesc::d3(format, n, usage))?;
         info.push(VolumeInfo {
             name: format!("voxel radiance ({format:?})"),
@@ -245,7 +245,7 @@ impl Volumes {
                 Image::new(
                     ctx,
                     &format!("directional volume {f}"),
-                    ImageDesc::d3(format, m, usage).mips(levels),
+                    ImageDesc::d3(format, m, padded_usage).mips(levels),
                 )
             })
             .collect::<VkResult<Vec<_>>>()?;
@@ -260,7 +260,7 @@ impl Volumes {
         let light_dir = if settings.paper {
             None
         } else {
-            let desc = ImageDesc::d3(vk::Format::R16G16B16A16_SFLOAT, m, usage).mips(levels);
+            let desc = ImageDesc::d3(vk::Format::R16G16B16A16_SFLOAT, m, padded_usage).mips(levels);
             info.push(VolumeInfo {
                 name: format!("directional light direction, {m}^3 with {levels} mips"),
                 bytes: face_bytes,

@@ -107,6 +107,27 @@ fn add_instance(scene: &mut Scene, first: u32, count: u32, material: u32, bounds
     scene.instances.len() - 1
 }
 
+/// A white (0.8) floor of half-size `floor_h` under a one-sided square emitter of half-size
+/// `lamp_h` and radiance `le`, facing down from height `y`.
+pub fn lamp_over_floor(floor_h: f32, lamp_h: f32, y: f32, le: f32) -> Scene {
+    let mut s = empty_scene();
+    let white = lambert(&mut s, Vec3::splat(0.8));
+    floor(&mut s, floor_h, white);
+    let lamp = emitter(&mut s, Vec3::ZERO, Vec3::splat(le), false);
+    let h = lamp_h;
+    quad(
+        &mut s,
+        [
+            Vec3::new(-h, y, h),
+            Vec3::new(-h, y, -h),
+            Vec3::new(h, y, -h),
+            Vec3::new(h, y, h),
+        ],
+        lamp,
+    );
+    s
+}
+
 /// A horizontal square floor of half-size `h` at y = 0, facing +Y.
 pub fn floor(scene: &mut Scene, h: f32, material: u32) {
     quad(
