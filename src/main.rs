@@ -26,9 +26,10 @@ USAGE:
              [--validate] [--timings] [--device NAME]
   voxgi info SCENE [render options]
   voxgi reference [SCENE] [--spp N] [--out FILE.exr] [--width W] [--height H] [--seed S]
-                  [--sun EL,AZ[,E]]
+                  [--sun EL,AZ[,E]] [--bounces N]
   voxgi compare A.exr REFERENCE.exr [--exposure EV]
-  voxgi hard-cases [NAME..] [--size N] [--voxels N] [--ref-spp N] [--bounces N] [--out FILE.md]
+  voxgi hard-cases [NAME..] [--size N] [--voxels N] [--ref-spp N] [--bounces N] [--ideal]
+                   [--out FILE.md]
   voxgi bench SCENE [--sweep SPEC] [--out DIR] [--width W --height H] [--frames N]
               [--warmup N] [--ref-spp N] [--sun EL,AZ[,E]] [--exposure EV] [--validate]
 
@@ -69,13 +70,18 @@ USAGE:
   --press FRAME:KEY       view: press KEY at frame FRAME, release it at the next (repeatable;
                           KEY as in the controls: a letter, a digit, [ ] - =, space, f12,
                           optionally shift+KEY), for scripted runs and tests
-  reference    CPU path-traced ground truth (all cores; --spp default 64, --seed default 0)
+  reference    CPU path-traced ground truth (all cores; --spp default 64, --seed default 0);
+               with --bounces B only the light a tracer with B bounces models (render's
+               --bounces: B reflections of punctual lights' light besides the surface seen,
+               B - 1 of emitters'), the best such a tracer can do
   hard-cases   runs the hard cases (light leaks, density, precision, degenerate input,
                extreme lights, cones at the edges; all of them or those named), each with
                --paper and the defaults at --voxels (default 64), --size (default 64)
                pixels and --bounces (default 1), under validation; prints (and writes to
                --out) the markdown table of docs/hard-cases.md; fails when a default setting
-               misses its goal
+               misses its goal; --ideal adds a column: the reference path tracer limited
+               to the default column's bounces (reference --bounces) in place of the
+               real-time image, for the cases measured against the reference
   compare      prints one JSON line: relMSE, MAE, RMSE (radiance) and FLIP (display images)
   bench        times each setting of a sweep (per-pass GPU medians and frame wall time over
                --frames, default 10, after --warmup, default 2) and measures its error
@@ -109,6 +115,7 @@ const FLAGS: &[&str] = &[
     "--voxel-shadows",
     "--cone-shadows",
     "--no-vsync",
+    "--ideal",
 ];
 const VALUED: &[&str] = &[
     "--out",
@@ -638,6 +645,16 @@ fn reference(args: &Args) -> Result<()> {
         height: args.number("--height", 512)?,
         spp: args.number("--spp", 64)?,
         seed: args.number("--seed", 0)?,
+        bounces: match args.value("--bounces") {
+            None => None,
+            Some(_) => {
+                let b: u32 = args.number("--bounces", 1)?;
+                if !(1..=voxgi::gi::MAX_BOUNCES).contains(&b) {
+                    bail!("--bounces must be 1 to {}", voxgi::gi::MAX_BOUNCES);
+                }
+                Some(b)
+            }
+        },
         progress: true,
         ..Default::default()
     };
@@ -753,6 +770,7 @@ fn hard_cases(args: &Args) -> Result<()> {
         args.number("--ref-spp", 256)?,
     )?;
     env.bounces = bounces;
+    env.ideal = args.flag("--ideal");
     let mut rows = Vec::new();
     for case in CASES
         .iter()
@@ -761,7 +779,7 @@ fn hard_cases(args: &Args) -> Result<()> {
         let paper = env.run(case, &env.settings(true));
         let default = env.run(case, &env.settings(false));
         eprintln!(
-            "{:24} paper {:>12.5}  default {:>12.5}  goal {}{}",
+            "{:24} paper {:>12.5}  default {:>12.5}  goal {}{}{}",
             case.name,
             paper.value,
             default.value,
@@ -770,7 +788,10 @@ fn hard_cases(args: &Args) -> Result<()> {
                 ""
             } else {
                 "  FAILS"
-            }
+            },
+            default.ideal.map_or(String::new(), |v| format!(
+                "  (path tracer, same bounces: {v:.5})"
+            ))
         );
         rows.push(Row {
             case,
@@ -778,7 +799,7 @@ fn hard_cases(args: &Args) -> Result<()> {
             default,
         });
     }
-    let table = hard::table(&rows, &default_label);
+    let table = hard::table(&rows, &default_label, env.ideal);
     print!("{table}");
     if let Some(out) = args.value("--out") {
         output::write_bytes_atomic(Path::new(out), table.as_bytes())

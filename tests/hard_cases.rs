@@ -111,6 +111,55 @@ fn check(name: &str) {
     }
 }
 
+#[test]
+fn the_ideal_column_is_the_path_tracer_with_the_same_bounces() {
+    // The furnace (albedo 0.5, Le = 1): with B bounces a perfect tracer gets
+    // 1 + 0.5 + ... + 0.5^B of the exact 2, a relative error of 0.5^(B + 1).
+    let case = CASES.iter().find(|c| c.name == "furnace").unwrap();
+    let mut guard = ENV.lock().unwrap_or_else(|e| e.into_inner());
+    let env = guard
+        .get_or_insert_with(|| Env::new(gpu::context(), SIZE, VOXELS, REF_SPP).expect("scratch"));
+    env.ideal = true;
+    let mut rows = Vec::new();
+    for b in [1u32, 2] {
+        env.bounces = b;
+        let default = env.run(case, &env.settings(false));
+        let ideal = default.ideal.expect("no ideal value");
+        let want = 0.5f64.powi(b as i32 + 1);
+        assert!(
+            (ideal - want).abs() < 0.01,
+            "{b} bounces: the path tracer's error {ideal}, exactly {want}"
+        );
+        assert!(
+            default.value >= ideal,
+            "{b} bounces: {} beats the ideal",
+            default.value
+        );
+        let paper = env.run(case, &env.settings(true));
+        assert!(paper.ideal.is_none(), "--paper got an ideal value");
+        rows.push(voxgi::hard::Row {
+            case,
+            paper,
+            default,
+        });
+    }
+    env.ideal = false;
+    env.bounces = voxgi::gi::GiSettings::default().bounces;
+    let table = voxgi::hard::table(&rows, "default", true);
+    assert!(
+        table
+            .lines()
+            .next()
+            .unwrap()
+            .ends_with("| path tracer, same bounces |"),
+        "{table}"
+    );
+    for (line, row) in table.lines().skip(2).zip(&rows) {
+        let cell = format!("| {:.4} |", row.default.ideal.unwrap());
+        assert!(line.ends_with(&cell), "{line} does not end with {cell}");
+    }
+}
+
 macro_rules! cases {
     ($($f:ident => $name:literal,)*) => {
         $(#[test] fn $f() { check($name) })*

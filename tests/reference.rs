@@ -145,6 +145,80 @@ fn furnace_converges_to_le_over_one_minus_albedo() {
     );
 }
 
+fn mean_rgb(img: &RadianceImage) -> Vec3 {
+    let sum: Vec3 = img.pixels.iter().map(|p| Vec3::new(p[0], p[1], p[2])).sum();
+    sum / img.pixels.len() as f32
+}
+
+#[test]
+fn bounces_limit_the_light_as_cone_tracing_counts_it() {
+    // The furnace with B bounces: an emitter's light reflects off at most B surfaces, the one
+    // seen included (cones gather an emitter's direct light), so Le (1 + a + ... + a^B).
+    let mut s = empty_scene();
+    let albedo = Vec3::new(0.3, 0.5, 0.7);
+    let le = Vec3::new(1.0, 0.8, 0.6);
+    let m = emitter(&mut s, albedo, le, false);
+    inward_sphere(&mut s, 1.0, m);
+    s.camera = look_at(
+        Vec3::new(0.1, 0.2, 0.0),
+        Vec3::new(1.0, 0.0, 0.3),
+        Vec3::Y,
+        90.0,
+    );
+    for b in 1..=3u32 {
+        let st = ReferenceSettings {
+            bounces: Some(b),
+            rr_depth: 8,
+            ..settings(4, 4, 4096)
+        };
+        let got = mean_rgb(&render(&s, &st));
+        let want = le * (Vec3::ONE - albedo.powf(b as f32 + 1.0)) / (Vec3::ONE - albedo);
+        let rel = ((got - want).abs() / want).max_element();
+        assert!(rel < 0.01, "{b} bounces: {got} against {want}");
+    }
+
+    // A point light at the centre of a white sphere: bounce k >= 1 adds a^k times the mean of
+    // the direct light everywhere on a sphere, so each bounce adds a times the one before,
+    // and the first one takes the light one reflection past the direct light.
+    let mut s = empty_scene();
+    let a = 0.6;
+    let m = lambert(&mut s, Vec3::splat(a));
+    inward_sphere(&mut s, 1.0, m);
+    s.lights.push(light(
+        LightKind::Point,
+        Vec3::splat(2.0),
+        Vec3::ZERO,
+        Vec3::Y,
+    ));
+    s.camera = look_at(
+        Vec3::new(0.1, 0.2, 0.0),
+        Vec3::new(1.0, 0.0, 0.3),
+        Vec3::Y,
+        90.0,
+    );
+    let at = |b: Option<u32>| {
+        let st = ReferenceSettings {
+            bounces: b,
+            rr_depth: 8,
+            ..settings(4, 4, 4096)
+        };
+        mean_rgb(&render(&s, &st)).x
+    };
+    let (l1, l2, l3, all) = (at(Some(1)), at(Some(2)), at(Some(3)), at(None));
+    let (d2, d3) = (l2 - l1, l3 - l2);
+    assert!(
+        d2 > 0.0 && (d3 / d2 - a).abs() < 0.03,
+        "bounces 1, 2, 3: {l1} {l2} {l3}; the third adds {d3}, the second {d2}"
+    );
+    // What the first three leave: a^4 / (1 - a) of the first bounce's a (mean direct light).
+    let rest = d2 / a * a.powi(3) / (1.0 - a);
+    assert!(
+        ((all - l3) / rest - 1.0).abs() < 0.05,
+        "all bounces {all}, 3 bounces {l3}: {} left, {rest} expected",
+        all - l3
+    );
+}
+
 /// World point seen through image position (fx, fy) in pixels on the plane y = 0, for
 /// `top_camera(height, fov)` at W x W.
 fn floor_point(fx: f32, fy: f32, w: u32, height: f32, fov_deg: f32) -> Vec3 {
@@ -699,6 +773,14 @@ fn cli_bad_input_fails_cleanly() {
         ),
         (vec!["reference", s, "--spp", "0", "--out", n], "--spp"),
         (vec!["reference", s, "--spp", "x", "--out", n], "--spp"),
+        (
+            vec!["reference", s, "--bounces", "0", "--out", n],
+            "--bounces",
+        ),
+        (
+            vec!["reference", s, "--bounces", "9", "--out", n],
+            "--bounces",
+        ),
         (vec!["reference", s, "--out", "ref.tiff"], "ref.tiff"),
         (
             vec!["reference", s, "--sun", "1,2,3,4", "--out", n],

@@ -211,6 +211,10 @@ pub fn reference_key(
     ] {
         h.bytes(&x.to_le_bytes());
     }
+    // Only when set, so that the full references keep their keys.
+    if let Some(b) = settings.bounces {
+        h.bytes(&(b as u64).to_le_bytes());
+    }
     format!(
         "{:016x}-{}x{}-{}",
         h.0, settings.width, settings.height, settings.spp

@@ -65,6 +65,11 @@ pub struct Env {
     pub ref_spp: u32,
     /// Light bounces of the default column (the defaults' own unless `--bounces` says).
     pub bounces: u32,
+    /// Also measure, for the cases measured against the reference, the reference limited to
+    /// the settings' bounces in place of the real-time image (`voxgi hard-cases --ideal`).
+    pub ideal: bool,
+    /// That measure for the current case.
+    ideal_value: Option<f64>,
     scratch: PathBuf,
     /// Non-finite pixels or voxels met by the current case.
     non_finite: Vec<String>,
@@ -82,6 +87,8 @@ pub struct Outcome {
     pub validation_messages: usize,
     /// An error instead of a value (e.g. a grid too large for the device).
     pub error: Option<String>,
+    /// With [`Env::ideal`]: what the reference path tracer limited to the same bounces scores.
+    pub ideal: Option<f64>,
 }
 
 impl Outcome {
@@ -104,6 +111,8 @@ impl Env {
             voxels,
             ref_spp,
             bounces: GiSettings::default().bounces,
+            ideal: false,
+            ideal_value: None,
             scratch,
             non_finite: Vec::new(),
             warnings: Vec::new(),
@@ -128,6 +137,7 @@ impl Env {
     pub fn run(&mut self, case: &Case, gi: &GiSettings) -> Outcome {
         self.non_finite.clear();
         self.warnings.clear();
+        self.ideal_value = None;
         let before = self.ctx.stats.count();
         let result = (case.run)(self, gi);
         let validation_messages = self.ctx.stats.count() - before;
@@ -140,6 +150,7 @@ impl Env {
             non_finite: std::mem::take(&mut self.non_finite),
             validation_messages,
             error,
+            ideal: self.ideal_value.take(),
         }
     }
 
@@ -255,8 +266,14 @@ impl Env {
         Ok(img)
     }
 
-    /// The reference path tracer's image of `scene` from `camera`.
-    pub fn reference(&mut self, scene: &Scene, camera: &Camera) -> RadianceImage {
+    /// The reference path tracer's image of `scene` from `camera`: all the light, or only
+    /// what a tracer with `bounces` models.
+    pub fn reference(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        bounces: Option<u32>,
+    ) -> RadianceImage {
         let mut s = scene.clone();
         s.camera = camera.clone();
         let img = reference::render(
@@ -265,10 +282,20 @@ impl Env {
                 width: self.size,
                 height: self.size,
                 spp: self.ref_spp,
+                bounces,
+                // Noise of its own, not the full reference's.
+                seed: u64::from(bounces.is_some()),
                 ..Default::default()
             },
         );
-        self.check_image("reference", &img);
+        self.check_image(
+            if bounces.is_some() {
+                "ideal"
+            } else {
+                "reference"
+            },
+            &img,
+        );
         img
     }
 
@@ -280,8 +307,26 @@ impl Env {
         gi: &GiSettings,
     ) -> Result<f64> {
         let img = self.render(scene, camera, gi)?;
-        let reference = self.reference(scene, camera);
+        let reference = self.reference(scene, camera, None);
+        self.measure_ideal(scene, camera, gi, |ideal| {
+            crate::metrics::compare(ideal, &reference).rel_mse
+        });
         Ok(crate::metrics::compare(&img, &reference).rel_mse)
+    }
+
+    /// With [`Env::ideal`] (and not `--paper`): `measure` of the reference limited to `gi`'s
+    /// bounces, kept as the case's [`Outcome::ideal`].
+    pub fn measure_ideal(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        gi: &GiSettings,
+        measure: impl FnOnce(&RadianceImage) -> f64,
+    ) {
+        if self.ideal && !gi.paper {
+            let img = self.reference(scene, camera, Some(gi.bounces));
+            self.ideal_value = Some(measure(&img));
+        }
     }
 }
 
@@ -356,22 +401,34 @@ fn cell(o: &Outcome, goal: Goal) -> String {
 }
 
 /// The markdown table of docs/hard-cases.md; `default` heads the defaults' column.
-pub fn table(rows: &[Row], default: &str) -> String {
+/// The markdown table; `ideal` adds the column of [`Outcome::ideal`].
+pub fn table(rows: &[Row], default: &str, ideal: bool) -> String {
+    let (extra, rule) = if ideal {
+        (" path tracer, same bounces |", "---|")
+    } else {
+        ("", "")
+    };
     let mut s = format!(
-        "| case | group | scene and measure | metric | goal | --paper | {default} |\n\
-         |---|---|---|---|---|---|---|\n",
+        "| case | group | scene and measure | metric | goal | --paper | {default} |{extra}\n\
+         |---|---|---|---|---|---|---|{rule}\n",
     );
     for r in rows {
         let c = r.case;
+        let ideal_cell = match (ideal, r.default.ideal) {
+            (false, _) => String::new(),
+            (true, Some(v)) => format!(" {v:.4} |"),
+            (true, None) => " - |".to_string(),
+        };
         s.push_str(&format!(
-            "| `{}` | {} | {} | {} | {} | {} | {} |\n",
+            "| `{}` | {} | {} | {} | {} | {} | {} |{}\n",
             c.name,
             c.group,
             c.what,
             c.metric,
             c.goal,
             cell(&r.paper, c.goal),
-            cell(&r.default, c.goal)
+            cell(&r.default, c.goal),
+            ideal_cell
         ));
     }
     s

@@ -37,6 +37,11 @@ pub struct ReferenceSettings {
     /// it only guards against endless paths in closed scenes of albedo 1. 1 gives direct
     /// light only: emission and next-event estimation at the first hit, no bounce.
     pub max_depth: u32,
+    /// Light bounces as voxel cone tracing counts them (`GiSettings::bounces`), or all of them
+    /// (None). With B: a punctual light's light reflects off at most B surfaces before the one
+    /// seen, and an emitter's off B - 1 (cones gather an emitter's direct light, so it counts
+    /// as a bounce). What a tracer with B bounces could reach at best.
+    pub bounces: Option<u32>,
     /// Bounces before Russian roulette starts.
     pub rr_depth: u32,
     /// A progress bar on stderr (only drawn when stderr is a terminal).
@@ -51,6 +56,7 @@ impl Default for ReferenceSettings {
             spp: 64,
             seed: 0,
             max_depth: 1024,
+            bounces: None,
             rr_depth: 3,
             progress: false,
         }
@@ -197,7 +203,11 @@ fn trace(world: &World, eye: Vec3, dir: Vec3, rng: &mut Pcg32, s: &ReferenceSett
     // Density (solid angle) of the BRDF sample that made the current ray; 0 for camera rays,
     // whose emission hits are not also reachable by light sampling.
     let mut bsdf_pdf = 0.0f32;
-    for depth in 0..s.max_depth.max(1) {
+    // Punctual lights are sampled at every hit up to depth B, emitters up to B - 1; emission
+    // met by BSDF sampling at depth B pairs (MIS) with the emitter sampled at B - 1.
+    let max_depth = s.bounces.map_or(s.max_depth, |b| (b + 1).min(s.max_depth));
+    let emitter_depths = s.bounces.unwrap_or(u32::MAX);
+    for depth in 0..max_depth.max(1) {
         let Some(hit) = world.intersect(o, d, f32::INFINITY) else {
             break;
         };
@@ -241,7 +251,7 @@ fn trace(world: &World, eye: Vec3, dir: Vec3, rng: &mut Pcg32, s: &ReferenceSett
             }
         }
 
-        if world.has_emitters() {
+        if world.has_emitters() && depth < emitter_depths {
             let u_pick = rng.next_f32();
             let u = rng.next_2d();
             if let Some(e) = world.sample_emitter(u_pick, u) {
