@@ -119,11 +119,16 @@ fn the_ideal_column_is_the_path_tracer_with_the_same_bounces() {
     let mut guard = ENV.lock().unwrap_or_else(|e| e.into_inner());
     let env = guard
         .get_or_insert_with(|| Env::new(gpu::context(), SIZE, VOXELS, REF_SPP).expect("scratch"));
-    env.ideal = true;
     let mut rows = Vec::new();
     for b in [1u32, 2] {
-        env.bounces = b;
-        let default = env.run(case, &env.settings(false));
+        let gi = voxgi::gi::GiSettings {
+            bounces: b,
+            ..env.settings(false)
+        };
+        // Set for this run only: the other cases share the environment.
+        env.ideal = true;
+        let default = env.run(case, &gi);
+        env.ideal = false;
         let ideal = default.ideal.expect("no ideal value");
         let want = 0.5f64.powi(b as i32 + 1);
         assert!(
@@ -135,7 +140,9 @@ fn the_ideal_column_is_the_path_tracer_with_the_same_bounces() {
             "{b} bounces: {} beats the ideal",
             default.value
         );
+        env.ideal = true;
         let paper = env.run(case, &env.settings(true));
+        env.ideal = false;
         assert!(paper.ideal.is_none(), "--paper got an ideal value");
         rows.push(voxgi::hard::Row {
             case,
@@ -143,8 +150,6 @@ fn the_ideal_column_is_the_path_tracer_with_the_same_bounces() {
             default,
         });
     }
-    env.ideal = false;
-    env.bounces = voxgi::gi::GiSettings::default().bounces;
     let table = voxgi::hard::table(&rows, "default", true);
     assert!(
         table

@@ -400,8 +400,8 @@ fn cell(o: &Outcome, goal: Goal) -> String {
     format!("{s} {mark}")
 }
 
-/// The markdown table of docs/hard-cases.md; `default` heads the defaults' column.
-/// The markdown table; `ideal` adds the column of [`Outcome::ideal`].
+/// The markdown table of docs/hard-cases.md; `default` heads the defaults' column, `ideal`
+/// adds the column of [`Outcome::ideal`].
 pub fn table(rows: &[Row], default: &str, ideal: bool) -> String {
     let (extra, rule) = if ideal {
         (" path tracer, same bounces |", "---|")
