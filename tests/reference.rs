@@ -93,21 +93,32 @@ fn look_at(eye: Vec3, target: Vec3, up: Vec3, yfov_deg: f32) -> Camera {
     }
 }
 
-/// A closed Lambertian sphere of albedo a emitting Le inside: radiance is Le / (1 - a)
-/// everywhere (all orders of bounces, so Russian roulette and MIS must both be unbiased).
-#[test]
-fn furnace_converges_to_le_over_one_minus_albedo() {
-    let mut s = empty_scene();
-    let albedo = Vec3::new(0.3, 0.5, 0.7);
-    let le = Vec3::new(1.0, 0.8, 0.6);
-    let m = emitter(&mut s, albedo, le, false);
-    inward_sphere(&mut s, 1.0, m);
-    s.camera = look_at(
+/// A camera inside the unit sphere at the origin, looking at its wall.
+fn inside_sphere_camera() -> Camera {
+    look_at(
         Vec3::new(0.1, 0.2, 0.0),
         Vec3::new(1.0, 0.0, 0.3),
         Vec3::Y,
         90.0,
-    );
+    )
+}
+
+/// A closed unit sphere of albedo `albedo` emitting `le` inwards, seen from inside.
+fn furnace_sphere(albedo: Vec3, le: Vec3) -> Scene {
+    let mut s = empty_scene();
+    let m = emitter(&mut s, albedo, le, false);
+    inward_sphere(&mut s, 1.0, m);
+    s.camera = inside_sphere_camera();
+    s
+}
+
+/// A closed Lambertian sphere of albedo a emitting Le inside: radiance is Le / (1 - a)
+/// everywhere (all orders of bounces, so Russian roulette and MIS must both be unbiased).
+#[test]
+fn furnace_converges_to_le_over_one_minus_albedo() {
+    let albedo = Vec3::new(0.3, 0.5, 0.7);
+    let le = Vec3::new(1.0, 0.8, 0.6);
+    let s = furnace_sphere(albedo, le);
     // Russian roulette from the 8th bounce: its variance on a geometric series of ratio 0.7
     // would otherwise need far more samples for 1% per pixel.
     let st = ReferenceSettings {
@@ -154,17 +165,9 @@ fn mean_rgb(img: &RadianceImage) -> Vec3 {
 fn bounces_limit_the_light_as_cone_tracing_counts_it() {
     // The furnace with B bounces: an emitter's light reflects off at most B surfaces, the one
     // seen included (cones gather an emitter's direct light), so Le (1 + a + ... + a^B).
-    let mut s = empty_scene();
     let albedo = Vec3::new(0.3, 0.5, 0.7);
     let le = Vec3::new(1.0, 0.8, 0.6);
-    let m = emitter(&mut s, albedo, le, false);
-    inward_sphere(&mut s, 1.0, m);
-    s.camera = look_at(
-        Vec3::new(0.1, 0.2, 0.0),
-        Vec3::new(1.0, 0.0, 0.3),
-        Vec3::Y,
-        90.0,
-    );
+    let s = furnace_sphere(albedo, le);
     for b in 1..=3u32 {
         let st = ReferenceSettings {
             bounces: Some(b),
@@ -190,12 +193,7 @@ fn bounces_limit_the_light_as_cone_tracing_counts_it() {
         Vec3::ZERO,
         Vec3::Y,
     ));
-    s.camera = look_at(
-        Vec3::new(0.1, 0.2, 0.0),
-        Vec3::new(1.0, 0.0, 0.3),
-        Vec3::Y,
-        90.0,
-    );
+    s.camera = inside_sphere_camera();
     let at = |b: Option<u32>| {
         let st = ReferenceSettings {
             bounces: b,
