@@ -189,6 +189,20 @@ impl Args {
             .filter_map(|(_, v)| v.as_deref())
             .collect()
     }
+    /// `--bounces B` if given, checked against the range every command allows.
+    fn bounces(&self) -> Result<Option<u32>> {
+        let Some(v) = self.value("--bounces") else {
+            return Ok(None);
+        };
+        match v.parse::<u32>() {
+            Ok(b) if (1..=voxgi::gi::MAX_BOUNCES).contains(&b) => Ok(Some(b)),
+            _ => bail!(
+                "--bounces must be 1 to {}, got {v:?}",
+                voxgi::gi::MAX_BOUNCES
+            ),
+        }
+    }
+
     fn number<T: std::str::FromStr>(&self, name: &str, default: T) -> Result<T> {
         match self.value(name) {
             None => Ok(default),
@@ -299,10 +313,7 @@ fn gi_settings(args: &Args) -> Result<GiSettings> {
             ..Default::default()
         }
     };
-    gi.bounces = args.number("--bounces", gi.bounces)?;
-    if !(1..=voxgi::gi::MAX_BOUNCES).contains(&gi.bounces) {
-        bail!("--bounces must be 1 to {}", voxgi::gi::MAX_BOUNCES);
-    }
+    gi.bounces = args.bounces()?.unwrap_or(gi.bounces);
     gi.cone_count = args.number("--cones", gi.cone_count)?;
     if !(1..=16).contains(&gi.cone_count) {
         bail!("--cones must be 1 to 16");
@@ -645,16 +656,7 @@ fn reference(args: &Args) -> Result<()> {
         height: args.number("--height", 512)?,
         spp: args.number("--spp", 64)?,
         seed: args.number("--seed", 0)?,
-        bounces: match args.value("--bounces") {
-            None => None,
-            Some(_) => {
-                let b: u32 = args.number("--bounces", 1)?;
-                if !(1..=voxgi::gi::MAX_BOUNCES).contains(&b) {
-                    bail!("--bounces must be 1 to {}", voxgi::gi::MAX_BOUNCES);
-                }
-                Some(b)
-            }
-        },
+        bounces: args.bounces()?,
         progress: true,
         ..Default::default()
     };
@@ -749,10 +751,7 @@ fn hard_cases(args: &Args) -> Result<()> {
         }
     }
     let default_bounces = voxgi::gi::GiSettings::default().bounces;
-    let bounces = args.number("--bounces", default_bounces)?;
-    if !(1..=voxgi::gi::MAX_BOUNCES).contains(&bounces) {
-        bail!("--bounces must be 1 to {}", voxgi::gi::MAX_BOUNCES);
-    }
+    let bounces = args.bounces()?.unwrap_or(default_bounces);
     let default_label = if bounces == default_bounces {
         "default".to_string()
     } else {
