@@ -181,7 +181,10 @@ impl VoxelGrid {
 /// Diffuse cones over the hemisphere around +Z: direction and weight, weights summing to pi
 /// (cosine-weighted solid angle). One cone along the normal covers the cap of the cone's half
 /// aperture; the rest share the band below it, tilted to the band's cosine-weighted mean angle.
-/// With 6 cones of 60 degrees this gives the paper's weights (pi/4 and 3pi/20).
+/// With 6 cones of 60 degrees this gives the paper's weights (pi/4 and 3pi/20). Many narrow
+/// cones on one ring at a single tilt leave the directions between it and the normal cone, and
+/// those near the surface, to no cone; so the cones go on two rings (a third of them on the
+/// inner one) when that leaves less of the hemisphere outside every cone.
 pub fn cone_set(count: u32, aperture_deg: f32, paper: bool) -> Vec<Vec4> {
     let count = count.clamp(1, 16);
     let pi = std::f32::consts::PI;
@@ -200,29 +203,90 @@ pub fn cone_set(count: u32, aperture_deg: f32, paper: bool) -> Vec<Vec4> {
         return vec![Vec4::new(0.0, 0.0, 1.0, pi)];
     }
     let beta = (aperture_deg.to_radians() * 0.5).clamp(0.01, 1.5);
-    let cap = pi * beta.sin().powi(2);
-    let ring_total = pi - cap;
-    // Cosine-weighted mean polar angle over the band [beta, pi/2]: integrate numerically.
+    let half_pi = std::f32::consts::FRAC_PI_2;
+    let rest = count - 1;
+    let one = rings(beta, &[(rest, beta, half_pi)]);
+    if rest < 3 {
+        return one;
+    }
+    // Two polar bands whose shares of the cosine-weighted solid angle match their shares of the
+    // cones, so that all ring cones weigh the same.
+    let inner = (rest + 1) / 3;
+    let sin2 = beta.sin().powi(2);
+    let split = (sin2 + (1.0 - sin2) * inner as f32 / rest as f32)
+        .sqrt()
+        .asin();
+    let two = rings(
+        beta,
+        &[(inner, beta, split), (rest - inner, split, half_pi)],
+    );
+    if uncovered(&two, beta) < uncovered(&one, beta) {
+        two
+    } else {
+        one
+    }
+}
+
+/// The normal cone (half angle `beta`, weighing its cap), then for each polar band
+/// `(n, from, to)` a ring of `n` cones sharing the band's weight.
+fn rings(beta: f32, bands: &[(u32, f32, f32)]) -> Vec<Vec4> {
+    let pi = std::f32::consts::PI;
+    let sin2 = |t: f32| t.sin().powi(2);
+    // Cones tilted further than 15 degrees above the surface with their edge would mostly see
+    // the surface they leave.
+    let steepest = std::f32::consts::FRAC_PI_2 - beta - 15f32.to_radians();
+    let mut cones = vec![Vec4::new(0.0, 0.0, 1.0, pi * sin2(beta))];
+    for (ring, &(n, from, to)) in bands.iter().enumerate() {
+        let tilt = cosine_weighted_mean_angle(from, to).min(steepest);
+        let weight = pi * (sin2(to) - sin2(from)) / n as f32;
+        // The outer ring's cones sit between the inner ring's.
+        let offset = 0.5 * ring as f32;
+        for k in 0..n {
+            let phi = (k as f32 + offset) * 2.0 * pi / n as f32;
+            let d = Vec3::new(tilt.sin() * phi.cos(), tilt.sin() * phi.sin(), tilt.cos());
+            cones.push(d.extend(weight));
+        }
+    }
+    cones
+}
+
+/// The share of the hemisphere's cosine-weighted solid angle that lies outside every cone of
+/// half angle `beta` (0: each direction is seen by some cone).
+fn uncovered(cones: &[Vec4], beta: f32) -> f32 {
+    let (rows, cols) = (90, 180);
+    let cos_beta = beta.cos();
+    let (mut outside, mut total) = (0.0f64, 0.0f64);
+    for i in 0..rows {
+        let theta = std::f32::consts::FRAC_PI_2 * (i as f32 + 0.5) / rows as f32;
+        let w = (theta.cos() * theta.sin()) as f64;
+        for j in 0..cols {
+            let phi = std::f32::consts::TAU * j as f32 / cols as f32;
+            let d = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.sin() * phi.sin(),
+                theta.cos(),
+            );
+            total += w;
+            if cones.iter().all(|c| c.truncate().dot(d) < cos_beta) {
+                outside += w;
+            }
+        }
+    }
+    (outside / total) as f32
+}
+
+/// The mean polar angle over the band [from, to] of the hemisphere, weighted by cos x sin
+/// (cosine-weighted solid angle), integrated numerically.
+fn cosine_weighted_mean_angle(from: f32, to: f32) -> f32 {
     let (mut num, mut den) = (0.0f64, 0.0f64);
     let steps = 512;
     for i in 0..steps {
-        let t = beta as f64
-            + (std::f64::consts::FRAC_PI_2 - beta as f64) * (i as f64 + 0.5) / steps as f64;
+        let t = from as f64 + (to - from) as f64 * (i as f64 + 0.5) / steps as f64;
         let w = t.cos() * t.sin();
         num += t * w;
         den += w;
     }
-    // Cones tilted further than 15 degrees above the surface with their edge would mostly see
-    // the surface they leave.
-    let tilt = ((num / den) as f32).min(std::f32::consts::FRAC_PI_2 - beta - 15f32.to_radians());
-    let ring = count - 1;
-    let mut cones = vec![Vec4::new(0.0, 0.0, 1.0, cap)];
-    for k in 0..ring {
-        let phi = k as f32 * 2.0 * pi / ring as f32;
-        let d = Vec3::new(tilt.sin() * phi.cos(), tilt.sin() * phi.sin(), tilt.cos());
-        cones.push(d.extend(ring_total / ring as f32));
-    }
-    cones
+    (num / den) as f32
 }
 
 /// Bits of frame.grid_info.w (glsl/common.glsl).
@@ -463,6 +527,41 @@ mod tests {
         assert!((six[1].w - 3.0 * std::f32::consts::PI / 20.0).abs() < 1e-5);
         let paper: f32 = cone_set(6, 60.0, true).iter().map(|c| c.w).sum();
         assert!((paper - std::f32::consts::PI).abs() < 1e-5);
+    }
+
+    #[test]
+    fn many_narrow_cones_go_on_two_rings_that_leave_less_unseen() {
+        for aperture in [30.0, 36.0, 45.0, 60.0, 90.0] {
+            for n in 1..=16 {
+                let s: f32 = cone_set(n, aperture, false).iter().map(|c| c.w).sum();
+                assert!(
+                    (s - std::f32::consts::PI).abs() < 1e-4,
+                    "{n} cones of {aperture} degrees sum to {s}"
+                );
+            }
+        }
+        let tilts = |c: &[Vec4]| {
+            let mut t: Vec<i32> = c.iter().map(|c| (c.z * 1e4) as i32).collect();
+            t.sort();
+            t.dedup();
+            t.len()
+        };
+        // The paper's count and aperture keep one ring.
+        assert_eq!(tilts(&cone_set(6, 60.0, false)), 2);
+        let beta = 18f32.to_radians();
+        let sixteen = cone_set(16, 36.0, false);
+        assert_eq!(
+            tilts(&sixteen),
+            3,
+            "16 cones of 36 degrees: normal and two rings"
+        );
+        // One ring of 15 at the band's mean tilt, as before two rings.
+        let one = rings(beta, &[(15, beta, std::f32::consts::FRAC_PI_2)]);
+        let (two_out, one_out) = (uncovered(&sixteen, beta), uncovered(&one, beta));
+        assert!(
+            two_out < 0.15 && one_out > 0.3,
+            "outside every cone: two rings {two_out}, one ring {one_out}"
+        );
     }
 
     #[test]
