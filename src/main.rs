@@ -44,7 +44,7 @@ USAGE:
   --bounces B  1 (default): direct light in the voxels; 2 to 8: plus B - 1 bounces between
                voxels (each one more bounce pass and mipmap)
   --paper      the original's behaviour and constants (RGBA8 averages and volumes, 6 cones)
-  --cones N, --aperture DEG, --step F   diffuse cones per pixel (6), their aperture (60),
+  --cones N, --aperture DEG, --step F   diffuse cones per pixel (16), their aperture (36),
                step as a fraction of the cone diameter (0.5)
   --voxel-shadows         voxel visibility by tracing the voxels (else the shadow maps)
   --cone-shadows          soft shadows: direct light shadowed by cones through the voxels

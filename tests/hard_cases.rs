@@ -40,9 +40,10 @@ const MEETS_GOAL: &[&str] = &[
     "no-light",
 ];
 
-/// Open cases that come within 1.5 times their goal: they must stay there (spot-hard-edge:
-/// 0.067 at 48x48).
-const NEAR_GOAL: &[&str] = &["spot-hard-edge"];
+/// Open cases that come within 1.5 times their goal: they must stay there (at 48x48 against
+/// 64 spp: spot-hard-edge 0.051, goal 0.05, which it meets in the report's 64x64 against 256
+/// spp; grid-8 0.131, goal 0.1).
+const NEAR_GOAL: &[&str] = &["spot-hard-edge", "grid-8"];
 
 /// One validated context for all cases: lavapipe's instance creation is slow and the cases run
 /// one at a time anyway (each renders at 48x48 and path-traces a reference on both cores).

@@ -147,7 +147,7 @@ fn default_preset() -> Vec<GiSettings> {
             ..d.clone()
         });
     }
-    for cone_aperture_deg in [30.0, 45.0, 60.0, 75.0, 90.0] {
+    for cone_aperture_deg in [30.0, 36.0, 45.0, 60.0, 90.0] {
         v.push(GiSettings {
             cone_aperture_deg,
             ..d.clone()

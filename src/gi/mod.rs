@@ -68,8 +68,11 @@ impl Default for GiSettings {
             voxels: 64,
             bounces: 1,
             paper: false,
-            cone_count: 6,
-            cone_aperture_deg: 60.0,
+            // 16 narrow cones instead of the paper's 6 of 60 degrees: wide cones' samples reach
+            // back into the surface they leave (opaque and, seen from behind, dark), and six
+            // cones are a coarse quadrature near small bright emitters (docs/hard-cases.md).
+            cone_count: 16,
+            cone_aperture_deg: 36.0,
             step_factor: 0.5,
             max_distance: 0.95,
             start_offset: 1.0,
