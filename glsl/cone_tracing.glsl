@@ -94,11 +94,17 @@ Cone trace_cone(vec3 origin, vec3 dir, float tan_half, float t0, float max_dist)
     float t = t0;
     for (int i = 0; i < 1024 && t < max_dist && cone.opacity < 0.99; i++) {
         vec3 uvw = world_to_grid(origin + dir * t);
-        if (any(lessThan(uvw, vec3(0.0))) || any(greaterThan(uvw, vec3(1.0)))) break;
 #ifdef PAPER
+        if (any(lessThan(uvw, vec3(0.0))) || any(greaterThan(uvw, vec3(1.0)))) break;
         float diameter = 2.0 * tan_half * t;
 #else
         float diameter = max(2.0 * tan_half * t, vs);
+        // A sample reads about a cone diameter around it, so the surfaces at the grid's edge
+        // are read in full only by samples up to that far beyond it (where the volumes are
+        // transparent): stopping at the edge let cones leave a closed room through its walls
+        // before they were opaque.
+        float margin = diameter / frame.grid.w;
+        if (any(lessThan(uvw, vec3(-margin))) || any(greaterThan(uvw, vec3(1.0 + margin)))) break;
 #endif
         vec4 s = sample_cone(uvw, dir, diameter);
         float step_len = max(diameter * frame.cone.y, 0.1 * vs);
