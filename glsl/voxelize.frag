@@ -119,7 +119,16 @@ void main() {
     float half_span = 0.5 * (abs(g_plane.x) + abs(g_plane.y));
     float lo0 = max(depth - half_span, g_depth.x);
     float hi0 = min(depth + half_span, g_depth.y);
-    uvec3 a = uvec3(round(clamp(base.rgb, 0.0, 1.0) * FIXED_ONE));
+    // A voxel shines like a Lambertian surface, so it keeps the BRDF's diffuse albedo only:
+    // none for a metal, and a dielectric's base colour less what its Fresnel term reflects
+    // specularly (Schlick's cosine-weighted mean, f0 + (f90 - f0) / 21). Its specular light
+    // goes in a lobe, and spread every way it lit the neighbours of a metal sphere as though
+    // it were chalk.
+    float metallic = clamp(m.params.x * texture(t_metallic_roughness, g_uv).b, 0.0, 1.0);
+    float spec = m.specular.a * texture(t_specular, g_uv).a;
+    vec3 f0 = min(vec3(0.04) * m.specular.rgb * texture(t_specular_color, g_uv).rgb, vec3(1.0)) * spec;
+    vec3 diffuse_albedo = base.rgb * (1.0 - metallic) * (1.0 - (f0 + (spec - f0) / 21.0));
+    uvec3 a = uvec3(round(clamp(diffuse_albedo, 0.0, 1.0) * FIXED_ONE));
     uvec3 n2 = uvec3(round(normal * normal * FIXED_ONE));
     // Emission weighted by coverage, and the emitters' coverage summed beside it: a voxel's
     // emission is the coverage-weighted mean of its emitters', diluted where they cover less

@@ -488,3 +488,72 @@ fn the_largest_grid_the_device_binds_voxelizes_and_one_more_is_refused() {
         "brightest voxel {brightest}"
     );
 }
+
+#[test]
+fn voxels_keep_the_diffuse_albedo_only() {
+    // Four horizontal quads of base colour 0.8, each in its own layer of voxels (32^3 with a
+    // voxel of padding: origin -1/30, voxels of 1/30, so y = 0.25 is the middle of layer 8).
+    let base = 0.8;
+    // Schlick's cosine-weighted mean of a dielectric's Fresnel term, f0 + (f90 - f0) / 21,
+    // with glTF's f0 = 0.04 and f90 = 1 (specularFactor 1).
+    let fresnel = 0.04 + 0.96 / 21.0;
+    let cases = [
+        // (metallic, specularFactor, expected voxel albedo, paper's)
+        (1.0, 1.0, 0.0),
+        (0.5, 1.0, 0.5 * base * (1.0 - fresnel)),
+        (0.0, 1.0, base * (1.0 - fresnel)),
+        (0.0, 0.0, base),
+    ];
+    let heights = [0.25f32, 0.45, 0.65, 0.85];
+    let mut s = empty_scene();
+    let anchor_m = lambert(&mut s, Vec3::splat(0.5));
+    anchor(&mut s, anchor_m);
+    for (&(metallic, specular, _), &y) in cases.iter().zip(&heights) {
+        s.materials.push(Material {
+            base_color: Vec3::splat(base).extend(1.0),
+            metallic,
+            roughness: 0.5,
+            specular_factor: specular,
+            ..Material::default()
+        });
+        let m = s.materials.len() as u32 - 1;
+        quad(
+            &mut s,
+            [
+                Vec3::new(0.2, y, 0.8),
+                Vec3::new(0.8, y, 0.8),
+                Vec3::new(0.8, y, 0.2),
+                Vec3::new(0.2, y, 0.2),
+            ],
+            m,
+        );
+    }
+    for paper in [false, true] {
+        let d = render_voxels(&s, voxel_settings(32, paper, Mode::VoxelsAlbedo));
+        for (&(metallic, specular, expected), &y) in cases.iter().zip(&heights) {
+            // --paper keeps the original's base colour (in RGBA8).
+            let (expected, tol) = if paper {
+                (base, 1.0 / 255.0)
+            } else {
+                (expected, 1e-3)
+            };
+            let layer = ((y + 1.0 / 30.0) * 30.0).floor() as u32;
+            let mut checked = 0;
+            // The voxels the quad covers whole: 7 to 24 in x and z.
+            for z in 7..=24 {
+                for x in 7..=24 {
+                    let i = d.index(x, layer, z);
+                    assert!(d.filled[i], "voxel ({x}, {layer}, {z}) is empty");
+                    let a = d.albedo[i];
+                    assert!(
+                        (a - Vec3::splat(expected)).abs().max_element() <= tol,
+                        "metallic {metallic}, specularFactor {specular}, paper {paper}: \
+                         voxel albedo {a}, expected {expected}"
+                    );
+                    checked += 1;
+                }
+            }
+            assert_eq!(checked, 18 * 18);
+        }
+    }
+}
