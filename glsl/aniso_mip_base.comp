@@ -17,6 +17,7 @@ layout(set = 0, binding = 6, VOLUME_FORMAT) uniform writeonly image3D face_pz;
 #ifndef PAPER
 layout(set = 0, binding = 7, rgba8_snorm) uniform readonly image3D emit_dir;
 layout(set = 0, binding = 8, rgba16f) uniform writeonly image3D light_dir;
+layout(set = 0, binding = 9, rgba16f) uniform writeonly image3D light_pos;
 #endif
 
 // A cone travelling along `face` sees a voxel's light only if the voxel sends it back against
@@ -36,7 +37,7 @@ void main() {
     if (any(greaterThanEqual(c, imageSize(face_nx)))) return;
     vec4 block[8];
 #ifndef PAPER
-    vec3 dirs[8];
+    vec4 dirs[8];
 #endif
     for (int i = 0; i < 8; i++) {
         ivec3 s = 2 * c + ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1);
@@ -44,7 +45,7 @@ void main() {
         bool inside = all(lessThan(s, imageSize(radiance)));
         block[i] = inside ? imageLoad(radiance, s) : vec4(0.0);
 #ifndef PAPER
-        dirs[i] = inside ? imageLoad(emit_dir, s).xyz : vec3(0.0);
+        dirs[i] = inside ? imageLoad(emit_dir, s) : vec4(0.0);
 #endif
     }
 #ifdef PAPER
@@ -58,16 +59,24 @@ void main() {
     // Where the block's light goes, weighted by its luminance, for cones to see it only from
     // that side (cone_tracing.glsl): the face volumes, one per axis, cannot tell a cone that
     // meets a surface from its front from one that comes from behind its plane.
+    // And where it lies: each voxel's surface (emit_dir.w: how far from its centre along its
+    // light's direction), in grid units, weighted the same way.
     vec4 going = vec4(0.0);
+    vec3 lies = vec3(0.0);
+    float n = float(imageSize(radiance).x);
     for (int i = 0; i < 8; i++) {
         // Rec. 709 luminance, as common.glsl's luminance() (whose bindings clash with this pass's).
         float l = dot(block[i].rgb, vec3(0.2126, 0.7152, 0.0722));
-        going += vec4(dirs[i] * l, l);
+        going += vec4(dirs[i].xyz * l, l);
+        ivec3 s = 2 * c + ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1);
+        vec3 g = dot(dirs[i].xyz, dirs[i].xyz) > 0.0 ? normalize(dirs[i].xyz) : vec3(0.0);
+        lies += l * (vec3(s) + 0.5 + dirs[i].w * g) / n;
     }
     imageStore(light_dir, c, going * 0.125);
+    imageStore(light_pos, c, vec4(lies * 0.125, 0.0));
     for (int face = 0; face < 6; face++) {
         vec4 shown[8];
-        for (int i = 0; i < 8; i++) shown[i] = facing(block[i], dirs[i], face);
+        for (int i = 0; i < 8; i++) shown[i] = facing(block[i], dirs[i].xyz, face);
         vec4 r = reduce_block(shown, face);
         if (face == 0) imageStore(face_nx, c, r);
         else if (face == 1) imageStore(face_px, c, r);

@@ -21,6 +21,8 @@ layout(set = 0, binding = 11, VOLUME_FORMAT) uniform writeonly image3D dst_pz;
 #ifndef PAPER
 layout(set = 0, binding = 12, rgba16f) uniform readonly image3D src_dir;
 layout(set = 0, binding = 13, rgba16f) uniform writeonly image3D dst_dir;
+layout(set = 0, binding = 14, rgba16f) uniform readonly image3D src_pos;
+layout(set = 0, binding = 15, rgba16f) uniform writeonly image3D dst_pos;
 #endif
 
 #define REDUCE(SRC, DST, FACE)                                                              \
@@ -41,12 +43,18 @@ void main() {
     REDUCE(src_nz, dst_nz, 4)
     REDUCE(src_pz, dst_pz, 5)
 #ifndef PAPER
-    // Where the light goes: the mean of the block's (luminance-weighted) directions.
+    // Where the light goes and where it lies: the means of the block's (luminance-weighted)
+    // directions and positions.
     vec4 going = vec4(0.0);
+    vec4 lies = vec4(0.0);
     for (int i = 0; i < 8; i++) {
         ivec3 s = 2 * c + ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1);
-        if (all(lessThan(s, imageSize(src_dir)))) going += imageLoad(src_dir, s);
+        if (all(lessThan(s, imageSize(src_dir)))) {
+            going += imageLoad(src_dir, s);
+            lies += imageLoad(src_pos, s);
+        }
     }
     imageStore(dst_dir, c, going * 0.125);
+    imageStore(dst_pos, c, lies * 0.125);
 #endif
 }

@@ -22,10 +22,12 @@ layout(set = CONE_SET, binding = 5) uniform sampler3D aniso_nz;
 layout(set = CONE_SET, binding = 6) uniform sampler3D aniso_pz;
 #ifndef PAPER
 layout(set = CONE_SET, binding = 7) uniform sampler3D light_dir;
+layout(set = CONE_SET, binding = 9) uniform sampler3D light_pos;
 #endif
 
-// The directional volumes seen by a cone travelling along `dir`, weighted by dir^2.
-vec4 sample_directional(vec3 uvw, vec3 dir, float level) {
+// The directional volumes seen by a cone travelling along `dir`, weighted by dir^2. Default:
+// seen from `from` (grid units), the cone's origin; see below.
+vec4 sample_directional(vec3 uvw, vec3 dir, float level, vec3 from, bool from_origin) {
     vec3 w = dir * dir;
     // With an odd grid the directional volumes cover one voxel more than the grid.
     uvw *= float(grid_n()) / float(2 * textureSize(aniso_nx, 0).x);
@@ -38,9 +40,27 @@ vec4 sample_directional(vec3 uvw, vec3 dir, float level) {
     // surface's plane from behind would see it through the volumes of the other axes: seen
     // from behind where its light goes, a texel's light is hidden.
     vec4 going = textureLod(light_dir, uvw, level);
-    s.rgb *= seen_from(going.w > 0.0 ? going.xyz / going.w : vec3(0.0), -dir);
+    vec3 g = going.w > 0.0 ? going.xyz / going.w : vec3(0.0);
+    float shown = seen_from(g, -dir);
+    if (going.w > 0.0 && from_origin) {
+        // And its light reaches the cone's origin only if that lies in front of the plane the
+        // light leaves (light_pos: the voxels' surfaces, light-weighted): a cone running beside
+        // a thin wall, on its dark side, reads texels that hold the wall's lit face, whose
+        // light goes at right angles to the cone. Hidden once the origin is a quarter of a
+        // texel (of 2^(level + 1) voxels) behind that plane.
+        vec3 lies = textureLod(light_pos, uvw, level).xyz / going.w;
+        float quarter_texel = exp2(level - 1.0) / float(grid_n());
+        shown *= clamp(1.0 + dot(from - lies, g) / quarter_texel, 0.0, 1.0);
+    }
+    s.rgb *= shown;
 #endif
     return s;
+}
+
+// The directional volumes at `uvw` as a cone along `dir` sees them, wherever it comes from (the
+// debug views).
+vec4 sample_directional(vec3 uvw, vec3 dir, float level) {
+    return sample_directional(uvw, dir, level, uvw, false);
 }
 
 #ifndef PAPER
@@ -55,26 +75,50 @@ float cone_level(float diameter) {
 }
 #endif
 
+#if CONE_FULL_RES && !defined(PAPER)
+// The full-resolution voxels around `uvw`, trilinearly weighted, each seen only from the side
+// its light goes to and only from in front of the plane it leaves (as sample_directional's
+// texels): filtered by hand, since the test is per voxel.
+vec4 full_res_seen(vec3 uvw, vec3 dir, vec3 from) {
+    int n = grid_n();
+    vec3 q = uvw * float(n) - 0.5;
+    ivec3 base = ivec3(floor(q));
+    vec3 f = q - vec3(base);
+    vec4 sum = vec4(0.0);
+    for (int k = 0; k < 8; k++) {
+        ivec3 o = ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
+        ivec3 c = base + o;
+        if (any(lessThan(c, ivec3(0))) || any(greaterThanEqual(c, ivec3(n)))) continue;
+        vec3 wk = mix(1.0 - f, f, vec3(o));
+        vec4 v = texelFetch(radiance_tex, c, 0);
+        vec4 e = texelFetch(emit_dir_tex, c, 0);
+        vec3 g = e.xyz;
+        // The voxel's surface: e.w voxels from its centre along where its light goes.
+        vec3 lies = (vec3(c) + 0.5 + (dot(g, g) > 0.0 ? e.w * normalize(g) : vec3(0.0))) / float(n);
+        // Hidden once the origin is a quarter of a voxel behind the surface's plane.
+        float front = clamp(1.0 + dot(from - lies, g) * float(4 * n), 0.0, 1.0);
+        float shown = seen_from(g, -dir) * front;
+        sum += wk.x * wk.y * wk.z * vec4(v.rgb * shown, v.a);
+    }
+    return sum;
+}
+#endif
+
 // What a cone of world diameter `diameter` sees at grid coordinates `uvw`.
-vec4 sample_cone(vec3 uvw, vec3 dir, float diameter) {
+vec4 sample_cone(vec3 uvw, vec3 dir, float diameter, vec3 from) {
     float vs = voxel_size();
 #ifdef PAPER
     // The original's "voxelWorldSize" is two voxels, and it subtracts one more level.
     float lod = log2(diameter / (2.0 * vs));
-    vec4 s = sample_directional(uvw, dir, max(lod - 1.0, 0.0));
+    vec4 s = sample_directional(uvw, dir, max(lod - 1.0, 0.0), from, true);
 #if CONE_FULL_RES
     if (lod < 1.0) s = mix(textureLod(radiance_tex, uvw, 0.0), s, clamp(lod, 0.0, 1.0));
 #endif
 #else
     float level = cone_level(diameter);
-    vec4 s = sample_directional(uvw, dir, max(level - 1.0, 0.0));
+    vec4 s = sample_directional(uvw, dir, max(level - 1.0, 0.0), from, true);
 #if CONE_FULL_RES
-    if (level < 1.0) {
-        // The full-resolution voxels, seen only from the side their light goes to.
-        vec4 full = textureLod(radiance_tex, uvw, 0.0);
-        full.rgb *= seen_from(textureLod(emit_dir_tex, uvw, 0.0).xyz, -dir);
-        s = mix(full, s, level);
-    }
+    if (level < 1.0) s = mix(full_res_seen(uvw, dir, from), s, level);
 #endif
 #endif
     return s;
@@ -92,6 +136,7 @@ Cone trace_cone(vec3 origin, vec3 dir, float tan_half, float t0, float max_dist)
     Cone cone = Cone(vec3(0.0), 0.0, 0.0);
     float vs = voxel_size();
     float t = t0;
+    vec3 from = world_to_grid(origin);
     for (int i = 0; i < 1024 && t < max_dist && cone.opacity < 0.99; i++) {
         vec3 uvw = world_to_grid(origin + dir * t);
 #ifdef PAPER
@@ -106,7 +151,7 @@ Cone trace_cone(vec3 origin, vec3 dir, float tan_half, float t0, float max_dist)
         float margin = diameter / frame.grid.w;
         if (any(lessThan(uvw, vec3(-margin))) || any(greaterThan(uvw, vec3(1.0 + margin)))) break;
 #endif
-        vec4 s = sample_cone(uvw, dir, diameter);
+        vec4 s = sample_cone(uvw, dir, diameter, from);
         float step_len = max(diameter * frame.cone.y, 0.1 * vs);
 #ifdef PAPER
         cone.radiance += (1.0 - cone.opacity) * s.rgb;

@@ -25,6 +25,9 @@ layout(set = 1, binding = 6, std430) readonly buffer VoxelList {
 layout(set = 1, binding = 5, rgba8) uniform image3D radiance;
 #else
 layout(set = 1, binding = 5, rgba16f) uniform image3D radiance;
+// Where the voxel's light goes (inject_radiance.comp): a two-sided voxel's bounce light goes
+// to the sides it fell on, as its direct light does.
+layout(set = 1, binding = 9, rgba8_snorm) uniform image3D emit_dir;
 #endif
 
 vec3 gather(vec3 p, vec3 n) {
@@ -71,8 +74,24 @@ void main() {
     vec3 n = dot(v.normal, v.normal) > 0.0 ? v.normal
            : (v.axis_weights.x >= max(v.axis_weights.y, v.axis_weights.z) ? vec3(1.0, 0.0, 0.0)
            : (v.axis_weights.y >= v.axis_weights.z ? vec3(0.0, 1.0, 0.0) : vec3(0.0, 0.0, 1.0)));
-    vec3 e = v.agreement < 0.5 ? 0.5 * (gather(p, n) + gather(p, -n)) : gather(p, n);
-    vec3 bounce = v.albedo / PI * e;
+    vec3 bounce;
+    if (v.agreement < 0.5) {
+        // Two-sided: each face reflects what falls on its side; the voxel holds their mean,
+        // and its light goes where the brighter side faces (as inject_radiance.comp's direct
+        // light does), not every way: a thin wall lit on one side stays dark on the other.
+        vec3 front = v.albedo / PI * gather(p, n);
+        vec3 back = v.albedo / PI * gather(p, -n);
+        bounce = 0.5 * (front + back);
+        float lf = luminance(front), lb = luminance(back);
+        vec3 bounce_dir = n * (lf - lb) / max(lf + lb, 1e-30);
+        vec3 dir = imageLoad(emit_dir, c).xyz;
+        float ld = luminance(direct.rgb / frame.tuning.y), lbounce = luminance(bounce);
+        vec3 going = (dir * ld + bounce_dir * lbounce) / max(ld + lbounce, 1e-30);
+        float along = dot(going, going) > 0.0 ? dot(v.offset, normalize(going)) : 0.0;
+        imageStore(emit_dir, c, vec4(going, along));
+    } else {
+        bounce = v.albedo / PI * gather(p, n);
+    }
 #endif
     imageStore(radiance, c, vec4(direct.rgb + bounce * frame.tuning.y, direct.a));
 }

@@ -20,7 +20,8 @@ layout(set = 1, binding = 5, rgba8) uniform writeonly image3D radiance;
 layout(set = 1, binding = 5, rgba16f) uniform writeonly image3D radiance;
 // Where the voxel's light goes (aniso_mip_base.comp), in xyz: the surface normal, or for a
 // two-sided voxel (a thin wall, both faces in one voxel) the side the lights fall on; shorter
-// where it spreads (bent surfaces, light on both sides), zero for every way.
+// where it spreads (bent surfaces, light on both sides), zero for every way; in w, where along it
+// the voxel's surfaces lie from its centre (in voxels).
 layout(set = 1, binding = 6, rgba8_snorm) uniform writeonly image3D emit_dir;
 #endif
 
@@ -107,7 +108,9 @@ void main() {
     // lights fall on; the emission (which side is unknown) goes every way.
     vec3 dir = two_sided ? lit_side / PI / max(luminance(outgoing), 1e-30)
                          : v.normal * v.agreement;
-    imageStore(emit_dir, c, vec4(dir, 0.0));
+    // w: how far in front of the centre the voxel's surfaces lie, along that direction.
+    float along = dot(dir, dir) > 0.0 ? dot(v.offset, normalize(dir)) : 0.0;
+    imageStore(emit_dir, c, vec4(dir, along));
 #endif
     imageStore(radiance, c, vec4(outgoing * frame.tuning.y, 1.0));
 }

@@ -5,10 +5,12 @@
 #define VOXEL_COMMON_GLSL
 
 // Per voxel, in two buffers (so that a 512^3 grid binds within a 4 GiB maxStorageBufferRange):
-// count, albedo r g b; and normal x y z (two's complement), squared normal x y z. The squared
-// normals keep the axes a voxel's surfaces face even where opposite normals cancel.
+// count, albedo r g b; and normal x y z (two's complement), squared normal x y z, where the
+// surfaces cross the voxel along their projection's axis, from its centre (two's complement, in
+// voxels). The squared normals keep the axes a voxel's surfaces face even where opposite
+// normals cancel.
 const uint ALBEDO_STRIDE = 4u;
-const uint NORMAL_STRIDE = 6u;
+const uint NORMAL_STRIDE = 7u;
 // Per voxel: emission r g b (scaled by frame.cone.w).
 const uint EMISSION_STRIDE = 4u;  // RGB weighted by coverage, emitters' coverage (volumes.rs)
 // 12 fractional bits: a 32-bit sum holds 2^20 fragments of value 1; the quantisation of one

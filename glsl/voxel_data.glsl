@@ -13,6 +13,7 @@ struct Voxel {
     float agreement;    // length of the averaged unit normals: 1 flat, ~0 opposite faces
     vec3 axis_weights;  // mean squared normal: how much the surfaces face each axis (sums to 1)
     vec3 emission;
+    vec3 offset;        // where its surfaces lie from its centre, mean, in voxels
 };
 
 #ifdef PAPER
@@ -36,6 +37,7 @@ Voxel load_voxel(ivec3 c) {
     v.axis_weights = v.normal * v.normal;
     v.emission = (frame.grid_info.w & FLAG_EMISSIVE) != 0u
         ? unpack_rgba8(emission_grid[i]).rgb / 255.0 : vec3(0.0);
+    v.offset = vec3(0.0);
     return v;
 }
 #else
@@ -62,12 +64,14 @@ Voxel load_voxel(ivec3 c) {
     uvec3 a = uvec3(static_albedo[i + 1u], static_albedo[i + 2u], static_albedo[i + 3u]);
     ivec3 n = ivec3(static_normal[k], static_normal[k + 1u], static_normal[k + 2u]);
     uvec3 n2 = uvec3(static_normal[k + 3u], static_normal[k + 4u], static_normal[k + 5u]);
+    int off = int(static_normal[k + 6u]);
     bool dynamic = (frame.grid_info.w & FLAG_DYNAMIC) != 0u;
     if (dynamic) {
         count += dynamic_albedo[i];
         a += uvec3(dynamic_albedo[i + 1u], dynamic_albedo[i + 2u], dynamic_albedo[i + 3u]);
         n += ivec3(dynamic_normal[k], dynamic_normal[k + 1u], dynamic_normal[k + 2u]);
         n2 += uvec3(dynamic_normal[k + 3u], dynamic_normal[k + 4u], dynamic_normal[k + 5u]);
+        off += int(dynamic_normal[k + 6u]);
     }
     v.filled = count > 0u;
     float inv = v.filled ? 1.0 / (float(count) * FIXED_ONE) : 0.0;
@@ -78,6 +82,11 @@ Voxel load_voxel(ivec3 c) {
     vec3 w = vec3(n2) * inv;
     float ws = w.x + w.y + w.z;
     v.axis_weights = ws > 0.0 ? w / ws : vec3(1.0 / 3.0);
+    // Along the axis the surfaces face most (their projection's, voxelize.frag).
+    int axis = v.axis_weights.x >= max(v.axis_weights.y, v.axis_weights.z) ? 0
+             : (v.axis_weights.y >= v.axis_weights.z ? 1 : 2);
+    v.offset = vec3(0.0);
+    v.offset[axis] = float(off) * inv;
     v.emission = vec3(0.0);
     if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u && v.filled) {
         uint j = voxel_index(c) * EMISSION_STRIDE;

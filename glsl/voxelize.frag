@@ -85,6 +85,7 @@ ivec3 unswizzle(ivec3 c) {
     return g_axis == 0 ? c.zxy : (g_axis == 1 ? c.yzx : c.xyz);
 }
 
+
 void main() {
     vec2 px = gl_FragCoord.xy;
     if (any(lessThan(px, g_aabb.xy)) || any(greaterThan(px, g_aabb.zw))) discard;
@@ -173,6 +174,11 @@ void main() {
             atomicAdd(normal_accum[k + 3u], n2.x);
             atomicAdd(normal_accum[k + 4u], n2.y);
             atomicAdd(normal_accum[k + 5u], n2.z);
+            // Where the surface crosses this voxel along the projection's axis, from its centre
+            // (across that axis the pixel's centre is the voxel's): cones see a voxel's light
+            // only from in front of its surface (cone_tracing.glsl), wherever in it that lies.
+            float along = clamp(depth + shift, float(z), float(z + 1)) - (float(z) + 0.5);
+            atomicAdd(normal_accum[k + 6u], uint(int(round(along * FIXED_ONE))));
             if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u) {
                 uint j = voxel_index(c) * EMISSION_STRIDE;
                 atomicAdd(emission_accum[j], e.r);

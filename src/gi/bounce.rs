@@ -43,6 +43,9 @@ pub fn cone_set(pool: &DescriptorPool, volumes: &Volumes, full_res: bool) -> VkR
     if let Some(dir) = &volumes.light_dir {
         descs.push((7, Desc::Sampled(dir.view, s)));
     }
+    if let Some(pos) = &volumes.light_pos {
+        descs.push((9, Desc::Sampled(pos.view, s)));
+    }
     pool.set(vk::ShaderStageFlags::COMPUTE, &descs)
 }
 
@@ -66,6 +69,9 @@ impl Bounce {
         let mut descs = voxel_data_descs(volumes);
         descs.push((5, Desc::StorageImage(volumes.radiance.view)));
         descs.push((6, Desc::Storage(&list)));
+        if let Some(dir) = &volumes.emit_dir {
+            descs.push((9, Desc::StorageImage(dir.view)));
+        }
         let set = pool.set(vk::ShaderStageFlags::COMPUTE, &descs)?;
         let cone_set = cone_set(pool, volumes, false)?;
         let variant = |name: &str| {
@@ -116,7 +122,10 @@ impl Bounce {
         let mut pass = read_voxel_data(g.pass(name), volumes)
             .image(&volumes.radiance, Access::ComputeStorageReadWrite)
             .buffer(&self.list, Access::ComputeIndirectRead);
-        for f in volumes.faces.iter().chain(&volumes.light_dir) {
+        if let Some(dir) = &volumes.emit_dir {
+            pass = pass.image(dir, Access::ComputeStorageReadWrite);
+        }
+        for f in volumes.directional() {
             pass = pass.image(f, Access::ComputeSampled);
         }
         pass.record(|cmd| unsafe {

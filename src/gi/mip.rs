@@ -33,6 +33,9 @@ impl Mip {
         if let Some(dir) = &volumes.light_dir {
             descs.push((8, Desc::StorageImage(dir.level_view(0))));
         }
+        if let Some(pos) = &volumes.light_pos {
+            descs.push((9, Desc::StorageImage(pos.level_view(0))));
+        }
         let base_set = pool.set(comp, &descs)?;
         let v = |s: &str| {
             if paper {
@@ -59,6 +62,10 @@ impl Mip {
             if let Some(dir) = &volumes.light_dir {
                 descs.push((12, Desc::StorageImage(dir.level_view(level - 1))));
                 descs.push((13, Desc::StorageImage(dir.level_view(level))));
+            }
+            if let Some(pos) = &volumes.light_pos {
+                descs.push((14, Desc::StorageImage(pos.level_view(level - 1))));
+                descs.push((15, Desc::StorageImage(pos.level_view(level))));
             }
             level_sets.push(pool.set(comp, &descs)?);
         }
@@ -90,8 +97,7 @@ impl Mip {
         }
         let d = &ctx.device;
         let mut pass = g.pass("clear directional padding").untimed();
-        let images: Vec<&crate::vk::Image> =
-            volumes.faces.iter().chain(&volumes.light_dir).collect();
+        let images: Vec<&crate::vk::Image> = volumes.directional().collect();
         for f in &images {
             pass = pass.image(f, Access::TransferWrite);
         }
@@ -134,7 +140,7 @@ impl Mip {
         if let Some(dir) = &volumes.emit_dir {
             pass = pass.image(dir, Access::ComputeStorageRead);
         }
-        for f in volumes.faces.iter().chain(&volumes.light_dir) {
+        for f in volumes.directional() {
             pass = pass.image(f, Access::ComputeStorageWrite);
         }
         pass.record(|cmd| dispatch(cmd, &self.base, &self.base_set, m));
@@ -144,7 +150,7 @@ impl Mip {
             for (i, set) in self.level_sets.iter().enumerate() {
                 let level = i as u32 + 1;
                 let mut pass = g.pass(&name);
-                for f in volumes.faces.iter().chain(&volumes.light_dir) {
+                for f in volumes.directional() {
                     pass = pass.image(f, Access::ComputeStorageReadWrite);
                 }
                 let over_grid = m.div_ceil(1 << level);

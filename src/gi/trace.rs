@@ -125,7 +125,7 @@ impl Trace {
         if let Some(dir) = &volumes.emit_dir {
             pass = pass.image(dir, Access::ComputeSampled);
         }
-        for f in volumes.faces.iter().chain(&volumes.light_dir) {
+        for f in volumes.directional() {
             pass = pass.image(f, Access::ComputeSampled);
         }
         let (p, set, push) = if debug {

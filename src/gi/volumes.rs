@@ -9,7 +9,7 @@ use std::sync::Arc;
 /// so that a 512^3 grid binds within a 4 GiB maxStorageBufferRange: the count and albedo sums,
 /// and the normal sums.
 pub const ALBEDO_STRIDE: u64 = 4;
-pub const NORMAL_STRIDE: u64 = 6;
+pub const NORMAL_STRIDE: u64 = 7;
 /// Emission sums: RGB weighted by coverage, then the emitting surfaces' coverage (fixed point,
 /// voxelize.frag).
 pub const EMISSION_STRIDE: u64 = 4;
@@ -18,7 +18,8 @@ pub const EMISSION_STRIDE: u64 = 4;
 pub struct Sums {
     /// Count, then albedo r g b (ALBEDO_STRIDE words a voxel).
     pub albedo: Buffer,
-    /// Normal, then squared normal (NORMAL_STRIDE words a voxel).
+    /// Normal, squared normal, then where the surfaces cross the voxel (NORMAL_STRIDE words a
+    /// voxel).
     pub normal: Buffer,
     /// When the scene emits (EMISSION_STRIDE words a voxel).
     pub emission: Option<Buffer>,
@@ -106,9 +107,11 @@ pub struct Volumes {
     /// Outgoing radiance per voxel, premultiplied by opacity (RGBA16F; RGBA8 for --paper).
     pub radiance: Image,
     /// The direction each voxel sends its light (RGBA8 signed, xyz; length 1: one side only,
-    /// 0: every way); the base mip level shows a voxel's light only in the directional volumes
-    /// of cones it reaches, so that a wall's lit side does not show through its back. None for
-    /// --paper, whose voxels shine every way.
+    /// 0: every way), and in w where along it the voxel's surfaces lie from its centre (in
+    /// voxels); the base mip level shows a voxel's light only in the directional volumes of
+    /// cones it reaches, so that a wall's lit side does not show through its back, and cones
+    /// see it only from in front of its surface. None for --paper, whose voxels shine every
+    /// way.
     pub emit_dir: Option<Image>,
     /// The six directional volumes (-X, +X, -Y, +Y, -Z, +Z) with full mip chains.
     pub faces: Vec<Image>,
@@ -117,6 +120,11 @@ pub struct Volumes {
     /// by the voxels averaged. Cones see a texel's light only from the side it goes to. None
     /// for --paper.
     pub light_dir: Option<Image>,
+    /// Beside it: where the texel's light lies (xyz: the voxels' surfaces, in grid units 0 to
+    /// 1, weighted by luminance like the directions). Cones see a texel's light only from in
+    /// front of the plane it leaves (a thin wall's lit face, which shares texels with the dark
+    /// room beside it). None for --paper.
+    pub light_pos: Option<Image>,
     /// Trilinear, transparent black outside the grid.
     pub sampler: Sampler,
     /// Stand-ins for bindings a mode leaves unused, one per binding role so that no two
@@ -126,6 +134,15 @@ pub struct Volumes {
 }
 
 impl Volumes {
+    /// The directional volumes and the volumes beside them (light direction and position),
+    /// which the mip passes write and the cones sample together.
+    pub fn directional(&self) -> impl Iterator<Item = &Image> {
+        self.faces
+            .iter()
+            .chain(&self.light_dir)
+            .chain(&self.light_pos)
+    }
+
     pub fn new(
         ctx: &Arc<Context>,
         grid: VoxelGrid,
@@ -267,6 +284,16 @@ impl Volumes {
             });
             Some(Image::new(ctx, "directional light direction", desc)?)
         };
+        let light_pos = if settings.paper {
+            None
+        } else {
+            let desc = ImageDesc::d3(vk::Format::R16G16B16A16_SFLOAT, m, padded_usage).mips(levels);
+            info.push(VolumeInfo {
+                name: format!("directional light position, {m}^3 with {levels} mips"),
+                bytes: face_bytes,
+            });
+            Some(Image::new(ctx, "directional light position", desc)?)
+        };
         let sampler = Sampler::new(
             ctx,
             &vk::SamplerCreateInfo::default()
@@ -296,6 +323,7 @@ impl Volumes {
             emit_dir,
             faces,
             light_dir,
+            light_pos,
             sampler,
             dummies,
             info,

@@ -68,10 +68,27 @@ pub fn slab_face(
     )
 }
 
+/// What lights the lit room of [`two_rooms`].
+#[derive(Clone, Copy, Debug)]
+pub enum RoomsLight {
+    /// A point light of 2 W/sr, 0.3 m above the room's centre.
+    Point,
+    /// A 0.6 m emissive square of this strength facing the partition from 0.6 m before the
+    /// room's far wall; nothing lights the partition but it and the light it bounces.
+    Emitter(f32),
+}
+
 /// Two closed rooms of 2 m side split along `axis` by a partition of `thickness` (0: two
-/// opposite faces in one plane). A point light of 2 W/sr in the room on the negative side.
+/// opposite faces in one plane) moved `offset` metres towards the dark room from the middle,
+/// the room on the negative side lit by `light`. In the middle the partition's faces lie on a
+/// voxel boundary (64^3), each in a voxel of its own side; 2 cm off they share a voxel.
 /// Returns the scene and the camera of each room (lit, dark).
-pub fn two_rooms(axis: usize, thickness: f32) -> (SceneBuilder, Camera, Camera) {
+pub fn two_rooms(
+    axis: usize,
+    thickness: f32,
+    light: RoomsLight,
+    offset: f32,
+) -> (SceneBuilder, Camera, Camera) {
     let mut b = SceneBuilder::new();
     let white = b.add_material(MaterialDesc::lambertian("white", WHITE));
     let mut lo = [-1.0, 0.0, -1.0];
@@ -86,8 +103,8 @@ pub fn two_rooms(axis: usize, thickness: f32) -> (SceneBuilder, Camera, Camera) 
     let t = 0.5 * thickness;
     let walls = merge(&[
         inward_box(lo, hi, white),
-        slab_face(lo, hi, axis, mid - t, -1.0, white),
-        slab_face(lo, hi, axis, mid + t, 1.0, white),
+        slab_face(lo, hi, axis, mid + offset - t, -1.0, white),
+        slab_face(lo, hi, axis, mid + offset + t, 1.0, white),
     ]);
     let mesh = b.add_mesh("rooms", vec![walls]);
     b.add_node(NodeDesc::new("rooms").mesh(mesh));
@@ -97,13 +114,49 @@ pub fn two_rooms(axis: usize, thickness: f32) -> (SceneBuilder, Camera, Camera) 
         c[axis] = mid + side;
         Vec3::from(c)
     };
-    let light = b.add_light(LightDesc::new("light", LightType::Point, [1.0; 3], 2.0));
     let lit = centre(-1.0);
-    b.add_node(
-        NodeDesc::new("light")
-            .light(light)
-            .translation((lit + Vec3::new(0.0, 0.3, 0.0)).to_array()),
-    );
+    match light {
+        RoomsLight::Point => {
+            let light = b.add_light(LightDesc::new("light", LightType::Point, [1.0; 3], 2.0));
+            b.add_node(
+                NodeDesc::new("light")
+                    .light(light)
+                    .translation((lit + Vec3::new(0.0, 0.3, 0.0)).to_array()),
+            );
+        }
+        RoomsLight::Emitter(strength) => {
+            let glow = b
+                .add_material(MaterialDesc::lambertian("glow", WHITE).emissive([1.0; 3], strength));
+            // The square's axes: the two other than `axis`, y first where it is one of them.
+            let (u, v) = match axis {
+                0 => (1, 2),
+                1 => (0, 2),
+                _ => (1, 0),
+            };
+            let mut c = lit.to_array();
+            c[axis] = mid - 1.4;
+            let corner = |du: f32, dv: f32| {
+                let mut p = c;
+                p[u] += du;
+                p[v] += dv;
+                p
+            };
+            let mut n = [0.0; 3];
+            n[axis] = 1.0;
+            let square = quad(
+                [
+                    corner(-0.3, -0.3),
+                    corner(0.3, -0.3),
+                    corner(0.3, 0.3),
+                    corner(-0.3, 0.3),
+                ],
+                n,
+                Some(glow),
+            );
+            let mesh = b.add_mesh("glow", vec![square]);
+            b.add_node(NodeDesc::new("glow").mesh(mesh));
+        }
+    }
     let camera = |c: Vec3| {
         look_at(
             c + Vec3::new(0.0, 0.0, 0.9),
