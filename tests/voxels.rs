@@ -211,23 +211,27 @@ fn closed_mesh_voxelizes_watertight() {
     }
 }
 
-#[test]
-fn hdr_emission_survives_unclamped() {
-    let mut s = empty_scene();
-    let m = lambert(&mut s, Vec3::splat(0.5));
-    anchor(&mut s, m);
-    emitter(&mut s, Vec3::ZERO, Vec3::new(17.0, 4.0, 0.25), false);
-    let y = 0.5;
+/// A horizontal square facing up, 0.2 to 0.8 in x and z, at height `y`.
+fn square(s: &mut Scene, y: f32, material: u32) {
     quad(
-        &mut s,
+        s,
         [
             Vec3::new(0.2, y, 0.8),
             Vec3::new(0.8, y, 0.8),
             Vec3::new(0.8, y, 0.2),
             Vec3::new(0.2, y, 0.2),
         ],
-        1,
+        material,
     );
+}
+
+#[test]
+fn hdr_emission_survives_unclamped() {
+    let mut s = empty_scene();
+    let m = lambert(&mut s, Vec3::splat(0.5));
+    anchor(&mut s, m);
+    emitter(&mut s, Vec3::ZERO, Vec3::new(17.0, 4.0, 0.25), false);
+    square(&mut s, 0.5, 1);
     let d = render_voxels(&s, voxel_settings(32, false, Mode::VoxelsRadiance));
     let radiance = d.radiance.as_ref().unwrap();
     let mut checked = 0;
@@ -517,16 +521,7 @@ fn voxels_keep_the_diffuse_albedo_only() {
             ..Material::default()
         });
         let m = s.materials.len() as u32 - 1;
-        quad(
-            &mut s,
-            [
-                Vec3::new(0.2, y, 0.8),
-                Vec3::new(0.8, y, 0.8),
-                Vec3::new(0.8, y, 0.2),
-                Vec3::new(0.2, y, 0.2),
-            ],
-            m,
-        );
+        square(&mut s, y, m);
     }
     for paper in [false, true] {
         let d = render_voxels(&s, voxel_settings(32, paper, Mode::VoxelsAlbedo));

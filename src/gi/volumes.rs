@@ -274,26 +274,20 @@ impl Volumes {
             name: format!("6 directional volumes, {m}^3 with {levels} mips"),
             bytes: 6 * face_bytes,
         });
-        let light_dir = if settings.paper {
-            None
-        } else {
+        // Beside the directional volumes, texel for texel (not for --paper).
+        let mut beside = |what: &str| -> VkResult<Option<Image>> {
+            if settings.paper {
+                return Ok(None);
+            }
             let desc = ImageDesc::d3(vk::Format::R16G16B16A16_SFLOAT, m, padded_usage).mips(levels);
             info.push(VolumeInfo {
-                name: format!("directional light direction, {m}^3 with {levels} mips"),
+                name: format!("directional {what}, {m}^3 with {levels} mips"),
                 bytes: face_bytes,
             });
-            Some(Image::new(ctx, "directional light direction", desc)?)
+            Image::new(ctx, &format!("directional {what}"), desc).map(Some)
         };
-        let light_pos = if settings.paper {
-            None
-        } else {
-            let desc = ImageDesc::d3(vk::Format::R16G16B16A16_SFLOAT, m, padded_usage).mips(levels);
-            info.push(VolumeInfo {
-                name: format!("directional light position, {m}^3 with {levels} mips"),
-                bytes: face_bytes,
-            });
-            Some(Image::new(ctx, "directional light position", desc)?)
-        };
+        let light_dir = beside("light direction")?;
+        let light_pos = beside("light position")?;
         let sampler = Sampler::new(
             ctx,
             &vk::SamplerCreateInfo::default()
