@@ -259,3 +259,64 @@ fn a_node_moving_under_a_point_light_redraws_the_views_it_crosses() {
     let m = compare(&after, &fresh).rel_mse;
     assert!(m < 1e-6, "moved vs fresh: relMSE {m}");
 }
+
+#[test]
+fn a_still_frame_only_traces_and_a_moved_light_lights_the_voxels_again() {
+    // A static scene with two bounces: the voxels' light (bounce included, which adds to the
+    // radiance volume in place) is kept while nothing moves, and made again when a light moves.
+    let (s, _) = scene();
+    let settings = RenderSettings {
+        timings: true,
+        dynamic_nodes: Vec::new(),
+        gi: GiSettings {
+            voxels: 32,
+            bounces: 2,
+            ..Default::default()
+        },
+        ..settings(0)
+    };
+    let moved_light = {
+        let mut l = s.lights[0].clone();
+        l.position = Vec3::new(-0.9, 1.7, 0.6);
+        l
+    };
+    let ctx = context();
+    let stats = ctx.stats.clone();
+    let runs = |r: &Renderer, pass: &str| {
+        r.timer
+            .as_ref()
+            .expect("lavapipe has timestamps")
+            .samples
+            .iter()
+            .find(|(name, _)| name == pass)
+            .map_or(0, |(_, v)| v.len())
+    };
+    let (first, again, moved, counts) = {
+        let mut r = Renderer::new(&ctx, &s, settings.clone()).unwrap();
+        let first = image(&mut r);
+        let again = image(&mut r);
+        let still = ["inject", "bounce", "trace", "voxelize static"].map(|p| runs(&r, p));
+        r.set_lights(std::slice::from_ref(&moved_light)).unwrap();
+        let moved = image(&mut r);
+        let after = ["inject", "bounce", "trace", "voxelize static"].map(|p| runs(&r, p));
+        (first, again, moved, [still, after])
+    };
+    let fresh = {
+        let mut s2 = s.clone();
+        s2.lights[0] = moved_light;
+        let mut r = Renderer::new(&ctx, &s2, settings).unwrap();
+        image(&mut r)
+    };
+    drop(ctx);
+    assert_eq!(stats.count(), 0, "{}", stats.messages().join("\n"));
+    assert_eq!(
+        counts,
+        [[1, 1, 2, 1], [2, 2, 3, 1]],
+        "inject, bounce, trace and voxelize runs after two still frames, then a moved light"
+    );
+    assert_eq!(first.pixels, again.pixels, "a still frame changed");
+    let change = compare(&moved, &first).rel_mse;
+    assert!(change > 0.01, "the light's move barely shows ({change})");
+    let m = compare(&moved, &fresh).rel_mse;
+    assert!(m < 1e-6, "moved light vs fresh: relMSE {m}");
+}

@@ -369,7 +369,11 @@ fn measure(
     if let Some(t) = r.timer.as_mut() {
         t.samples.clear();
     }
+    // Each timed frame is one after the lights moved: shadow maps, voxel lighting and bounces
+    // run, as every setting's cost lies there as well as in the trace (a still frame of a
+    // still scene only traces).
     for _ in 0..opts.frames {
+        r.relight();
         r.render(false).map_err(|e| e.to_string())?;
     }
     let passes = r

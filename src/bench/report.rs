@@ -236,9 +236,10 @@ pub fn markdown(res: &BenchResults) -> String {
     );
     let _ = writeln!(
         out,
-        "- time: median (min to max) over {} frame{} after {} warm-up frame{}; frame = \
-         submission to fence (wall clock), passes = GPU timestamps (on lavapipe they can miss \
-         compute work: trust the frame time there)",
+        "- time: median (min to max) over {} frame{} after {} warm-up frame{}, each after the \
+         lights moved (shadow maps, voxel lighting and bounces run; a still frame only \
+         traces); frame = submission to fence (wall clock), passes = GPU timestamps (on \
+         lavapipe they can miss compute work: trust the frame time there)",
         o.frames,
         if o.frames == 1 { "" } else { "s" },
         o.warmup,

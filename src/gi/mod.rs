@@ -316,6 +316,10 @@ pub struct Gi {
     pub radiance_scale: f32,
     /// Static geometry must be voxelized (first frame, or a static node moved).
     pub static_dirty: bool,
+    /// Dynamic geometry must be voxelized again (first frame, or a dynamic node moved).
+    pub dynamic_dirty: bool,
+    /// The voxels must be lit again: a light changed (or the first frame).
+    pub lights_dirty: bool,
     _pool: DescriptorPool,
 }
 
@@ -424,6 +428,8 @@ impl Gi {
                 radiance_scale(scene, grid.voxel_size(), max_emission)
             },
             static_dirty: true,
+            dynamic_dirty: true,
+            lights_dirty: true,
             _pool: pool,
         })
     }
@@ -452,9 +458,17 @@ impl Gi {
             self.voxelizer
                 .record(ctx, g, &self.volumes, gpu, false, draw_static);
         }
-        if self.dynamic {
+        // The static pass may clear the dynamic voxels too (the paper's clears all).
+        let dynamic_changed = self.dynamic && (self.static_dirty || self.dynamic_dirty);
+        if dynamic_changed {
             self.voxelizer
                 .record(ctx, g, &self.volumes, gpu, true, draw_dynamic);
+        }
+        // Nothing the voxels' light depends on changed: the volumes keep the last frame's
+        // light, bounces included, and a still frame only traces.
+        let voxels_changed = self.static_dirty || dynamic_changed;
+        if !(voxels_changed || self.lights_dirty) {
+            return;
         }
         if let Some((inject, mip)) = &self.lighting {
             if self.static_dirty {
@@ -463,7 +477,6 @@ impl Gi {
             inject.record(ctx, g, &self.volumes, scene_set, shadow_map, "");
             mip.record(ctx, g, &self.volumes, "");
             if let Some(b) = &self.bounce {
-                let voxels_changed = self.static_dirty || self.dynamic;
                 for k in 2..=self.settings.bounces {
                     // The bounce adds to the radiance volume in place, so from the third on
                     // the direct light is injected again first; the directional volumes still
@@ -478,6 +491,13 @@ impl Gi {
                 }
             }
         }
+    }
+
+    /// The voxel passes have run for the current scene and lights.
+    pub fn mark_clean(&mut self) {
+        self.static_dirty = false;
+        self.dynamic_dirty = false;
+        self.lights_dirty = false;
     }
 
     /// Passes this renderer runs, for `voxgi info`.

@@ -781,9 +781,9 @@ impl Renderer {
         self.timer = timer;
         submitted?;
         self.shadow_views_dirty.fill(false);
-        // The static voxels now hold the static geometry until a static node moves.
+        // The voxels now hold the geometry and its light until a node or a light moves.
         if let Some(gi) = self.gi.as_mut() {
-            gi.static_dirty = false;
+            gi.mark_clean();
         }
         Ok(())
     }
@@ -989,11 +989,11 @@ impl Renderer {
         self.transforms[instance].determinant().is_sign_negative() as u32
     }
 
-    /// Moves every instance of a glTF node. A dynamic node is voxelized again every frame
-    /// anyway; moving a static node voxelizes the static geometry again on the next frame.
-    /// Either way the next frame draws again the shadow views it moves through.
+    /// Moves every instance of a glTF node: the next frame voxelizes again the geometry of
+    /// its kind (dynamic or static), lights the voxels again and draws again the shadow views
+    /// it moves through. Setting the transform it has changes nothing.
     pub fn set_node_transform(&mut self, node: usize, world: Mat4) {
-        let mut moved_static = false;
+        let (mut moved_static, mut moved_dynamic) = (false, false);
         for (i, &n) in self.instance_nodes.iter().enumerate() {
             if n == node && self.transforms[i] != world {
                 // Where it was and where it goes: the views that see either draw again.
@@ -1007,10 +1007,12 @@ impl Renderer {
                 }
                 self.transforms[i] = world;
                 moved_static |= !self.dynamic_instances[i];
+                moved_dynamic |= self.dynamic_instances[i];
             }
         }
-        if let (true, Some(gi)) = (moved_static, self.gi.as_mut()) {
-            gi.static_dirty = true;
+        if let Some(gi) = self.gi.as_mut() {
+            gi.static_dirty |= moved_static;
+            gi.dynamic_dirty |= moved_dynamic;
         }
     }
 
@@ -1079,12 +1081,22 @@ impl Renderer {
             self.gpu.shadow_views.write(0, as_bytes(&all_views));
         }
         self.gpu.light_views = views;
-        self.shadow_views_dirty.fill(true);
+        self.relight();
         Ok(())
     }
 
+    /// The next frame draws every shadow map and lights the voxels again (bounces included),
+    /// as after a light moved; the benchmark times such frames.
+    pub fn relight(&mut self) {
+        self.shadow_views_dirty.fill(true);
+        if let Some(gi) = self.gi.as_mut() {
+            gi.lights_dirty = true;
+        }
+    }
+
     /// The passes a frame records, in order (what `--timings` will list; the shadow maps only
-    /// on the first frame and after a light or a node moved through them).
+    /// on the first frame and after a light or a node moved through them, the voxel passes
+    /// only on the first frame and after a light or a node moved).
     pub fn passes(&self) -> Vec<String> {
         let mut p = Vec::new();
         if self.gpu.shadow_view_count > 0 {
