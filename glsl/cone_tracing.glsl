@@ -95,8 +95,10 @@ vec4 full_res_seen(vec3 uvw, vec3 dir, vec3 from) {
         vec3 g = e.xyz;
         // The voxel's surface: e.w voxels from its centre along where its light goes.
         vec3 lies = (vec3(c) + 0.5 + (dot(g, g) > 0.0 ? e.w * normalize(g) : vec3(0.0))) / float(n);
-        // Hidden once the origin is a quarter of a voxel behind the surface's plane.
-        float front = clamp(1.0 + dot(from - lies, g) * float(4 * n), 0.0, 1.0);
+        // Hidden once the origin is 1/64 of a voxel behind the surface's plane: two steps of
+        // the stored offset (RGBA8 snorm). A quarter of a voxel let the shaded side of a thin
+        // panel see its lit side at its foot, more with each bounce.
+        float front = clamp(1.0 + dot(from - lies, g) * float(64 * n), 0.0, 1.0);
         float shown = seen_from(g, -dir) * front;
         sum += wk.x * wk.y * wk.z * vec4(v.rgb * shown, v.a);
     }

@@ -41,8 +41,8 @@ USAGE:
                voxels-emission, voxels-radiance: the first voxel along each ray
   --mip L      with voxels-radiance: the directional volumes at mip level L
   --voxels N   voxels per side of the grid (default 64)
-  --bounces B  1 (default): direct light in the voxels; 2 to 8: plus B - 1 bounces between
-               voxels (each one more bounce pass and mipmap)
+  --bounces B  1: direct light in the voxels; 2 (default) to 8: plus B - 1 bounces between
+               voxels (each one more bounce pass and mipmap, run when a light or node moves)
   --paper      the original's behaviour and constants (RGBA8 averages and volumes, 6 cones)
   --cones N, --aperture DEG, --step F   diffuse cones per pixel (16), their aperture (36),
                step as a fraction of the cone diameter (0.5)
@@ -77,7 +77,7 @@ USAGE:
   hard-cases   runs the hard cases (light leaks, density, precision, degenerate input,
                extreme lights, cones at the edges; all of them or those named), each with
                --paper and the defaults at --voxels (default 64), --size (default 64)
-               pixels and --bounces (default 1), under validation; prints (and writes to
+               pixels and --bounces (default 2), under validation; prints (and writes to
                --out) the markdown table of docs/hard-cases.md; fails when a default setting
                misses its goal; --ideal adds a column: the reference path tracer limited
                to the default column's bounces (reference --bounces) in place of the

@@ -32,6 +32,7 @@ const MEETS_GOAL: &[&str] = &[
     "leak-floor-1cm",
     "leak-wall-bounce",
     "two-sided-panel",
+    "spot-hard-edge",
     "sun-along-axis",
     "sun-grazing",
     "emissive-dynamic",
@@ -42,10 +43,11 @@ const MEETS_GOAL: &[&str] = &[
     "no-light",
 ];
 
-/// Open cases that come within 1.5 times their goal: they must stay there (at 48x48 against
-/// 64 spp: spot-hard-edge 0.051, goal 0.05, too close to it to hold it there; it meets it in
-/// the report's 64x64 against 256 spp; grid-8 0.143, goal 0.1).
-const NEAR_GOAL: &[&str] = &["spot-hard-edge", "grid-8"];
+/// Open cases that come within 1.5 times their goal: they must stay there. At 48x48 against
+/// 64 spp references: camera-in-volume 0.064 and grid-48 0.064 (goal 0.05; they meet it in
+/// the report's 64x64 against 256 spp, 0.042 and 0.048, the references' noise making the
+/// rest), grid-8 0.111 (goal 0.1).
+const NEAR_GOAL: &[&str] = &["camera-in-volume", "grid-48", "grid-8"];
 
 /// One validated context for all cases: lavapipe's instance creation is slow and the cases run
 /// one at a time anyway (each renders at 48x48 and path-traces a reference on both cores).

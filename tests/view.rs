@@ -319,7 +319,7 @@ fn sponza_with_a_spinning_cube_resizes_and_matches_render() {
 
 #[test]
 fn keys_change_mode_bounces_and_voxels_as_the_command_line_would() {
-    // The bundled Cornell box: 3 is the indirect mode, B two bounces, Shift+V halves the
+    // The bundled Cornell box: 3 is the indirect mode, B three bounces, Shift+V halves the
     // voxels (64 -> 32); the tall box turns meanwhile (a quarter turn per second).
     let common = [
         "--width",
@@ -351,7 +351,7 @@ fn keys_change_mode_bounces_and_voxels_as_the_command_line_would() {
             "--mode",
             "indirect",
             "--bounces",
-            "2",
+            "3",
             "--voxels",
             "32",
         ],
@@ -366,7 +366,7 @@ fn keys_change_mode_bounces_and_voxels_as_the_command_line_would() {
         .unwrap_or_else(|| panic!("no title printed:\n{printed}"));
     for want in [
         "indirect",
-        "2 bounces",
+        "3 bounces",
         "32^3",
         "ms",
         "trace ",

@@ -308,7 +308,7 @@ mod tests {
             "64^3 cones=1",
             "64^3 aperture=30",
             "64^3 step=0.25",
-            "64^3 bounces=2",
+            "64^3 bounces=1",
         ] {
             assert!(labels.contains(&l), "{l} missing from {labels:?}");
         }
