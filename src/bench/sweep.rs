@@ -187,7 +187,7 @@ const AXES: &[(&str, f64, f64, bool, Apply)] = &[
         g.cone_aperture_deg = v as f32
     }),
     ("step", 0.05, 4.0, false, |g, v| g.step_factor = v as f32),
-    ("max-distance", 0.01, 1.0, false, |g, v| {
+    ("max-distance", 0.01, 2.0, false, |g, v| {
         g.max_distance = v as f32
     }),
     ("start-offset", 0.0, 16.0, false, |g, v| {

@@ -45,7 +45,7 @@ pub struct GiSettings {
     pub cone_aperture_deg: f32,
     /// Step length as a fraction of the cone diameter.
     pub step_factor: f32,
-    /// Longest cone, as a fraction of the grid's edge.
+    /// Longest cone, as a fraction of the grid's edge (cones also end a diameter past the grid).
     pub max_distance: f32,
     /// How far cones start off the surface, in voxels.
     pub start_offset: f32,
@@ -75,7 +75,11 @@ impl Default for GiSettings {
             cone_count: 16,
             cone_aperture_deg: 36.0,
             step_factor: 0.5,
-            max_distance: 0.95,
+            // Cones end where the grid does (a diameter past its edge), not before: the paper's
+            // 0.95 of the edge cut off cones across a closed room before its far walls made
+            // them opaque, losing up to 16% of the light by where those walls fell in the
+            // coarse texels (docs/hard-cases.md). Twice the edge exceeds the grid's diagonal.
+            max_distance: 2.0,
             start_offset: 1.0,
             ao_falloff: 1.0,
             voxel_shadows: false,
