@@ -25,17 +25,57 @@ layout(set = 0, binding = 14, rgba16f) uniform readonly image3D src_pos;
 layout(set = 0, binding = 15, rgba16f) uniform writeonly image3D dst_pos;
 #endif
 
+#ifdef PAPER
+// The original's 2x2x2 blocks: a level of odd size drops its last texel (Vulkan rounds mip
+// sizes down), so the coarser levels no longer reach the grid's far end.
 #define REDUCE(SRC, DST, FACE)                                                              \
     for (int i = 0; i < 8; i++) {                                                          \
         ivec3 s = 2 * c + ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1);                        \
         block[i] = all(lessThan(s, imageSize(SRC))) ? imageLoad(SRC, s) : vec4(0.0);       \
     }                                                                                      \
     imageStore(DST, c, reduce_block(block, FACE));
+#else
+// Source texels lo..hi (2 or, for the last texel of a level of odd size, 3 along an axis):
+// along the face's direction composited front to back, across it averaged, as reduce_block.
+#define REDUCE(SRC, DST, FACE)                                                              \
+    {                                                                                      \
+        int axis = FACE / 2;                                                               \
+        bool high_first = (FACE % 2) == 0;                                                 \
+        int u = (axis + 1) % 3;                                                            \
+        int w = (axis + 2) % 3;                                                            \
+        vec4 sum = vec4(0.0);                                                              \
+        for (int a = 0; a < count[u]; a++) {                                               \
+            for (int b = 0; b < count[w]; b++) {                                           \
+                vec4 acc = vec4(0.0);                                                      \
+                for (int k = 0; k < count[axis]; k++) {                                    \
+                    ivec3 s = lo;                                                          \
+                    s[u] += a;                                                             \
+                    s[w] += b;                                                             \
+                    s[axis] += high_first ? count[axis] - 1 - k : k;                       \
+                    acc += imageLoad(SRC, s) * (1.0 - acc.a);                              \
+                }                                                                          \
+                sum += acc;                                                                \
+            }                                                                              \
+        }                                                                                  \
+        imageStore(DST, c, sum / float(count[u] * count[w]));                              \
+    }
+#endif
 
 void main() {
     ivec3 c = ivec3(gl_GlobalInvocationID);
     if (any(greaterThanEqual(c, imageSize(dst_nx)))) return;
+#ifdef PAPER
     vec4 block[8];
+#else
+    // A texel holds the two texels below it, and the last texel of a level of odd size the
+    // third too: every level ends where the grid does. (Padding the base level up to a power
+    // of two instead left the walls at the grid's far end in coarse texels mostly past it,
+    // which a cone across a room read as nearly empty.)
+    ivec3 src = imageSize(src_nx);
+    ivec3 lo = 2 * c;
+    ivec3 hi = mix(min(lo + 1, src - 1), src - 1, equal(c, imageSize(dst_nx) - 1));
+    ivec3 count = hi - lo + 1;
+#endif
     REDUCE(src_nx, dst_nx, 0)
     REDUCE(src_px, dst_px, 1)
     REDUCE(src_ny, dst_ny, 2)
@@ -47,14 +87,16 @@ void main() {
     // directions and positions.
     vec4 going = vec4(0.0);
     vec4 lies = vec4(0.0);
-    for (int i = 0; i < 8; i++) {
-        ivec3 s = 2 * c + ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1);
-        if (all(lessThan(s, imageSize(src_dir)))) {
-            going += imageLoad(src_dir, s);
-            lies += imageLoad(src_pos, s);
+    for (int x = lo.x; x <= hi.x; x++) {
+        for (int y = lo.y; y <= hi.y; y++) {
+            for (int z = lo.z; z <= hi.z; z++) {
+                going += imageLoad(src_dir, ivec3(x, y, z));
+                lies += imageLoad(src_pos, ivec3(x, y, z));
+            }
         }
     }
-    imageStore(dst_dir, c, going * 0.125);
-    imageStore(dst_pos, c, lies * 0.125);
+    float n = float(count.x * count.y * count.z);
+    imageStore(dst_dir, c, going / n);
+    imageStore(dst_pos, c, lies / n);
 #endif
 }

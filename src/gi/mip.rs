@@ -51,7 +51,7 @@ impl Mip {
             0,
             &Spec(vec![]),
         )?;
-        let levels = volumes.grid.mip_levels(paper);
+        let levels = volumes.grid.mip_levels();
         let mut level_sets = Vec::new();
         for level in 1..levels {
             let mut descs = Vec::new();
@@ -87,39 +87,10 @@ impl Mip {
         })
     }
 
-    /// Zeroes the directional volumes where they reach past the grid (a padded base level,
-    /// VoxelGrid::aniso_resolution): the mip passes write only the texels over the grid, and
-    /// the coarser levels and the cones' samples at the grid's edge read these as empty.
-    /// Needed once, before the first mip pass; nothing else writes there.
-    pub fn record_clear_padding(&self, ctx: &Context, g: &mut Graph, volumes: &Volumes) {
-        if volumes.faces[0].desc.extent.width == volumes.grid.texels_over_grid() {
-            return;
-        }
-        let d = &ctx.device;
-        let mut pass = g.pass("clear directional padding").untimed();
-        let images: Vec<&crate::vk::Image> = volumes.directional().collect();
-        for f in &images {
-            pass = pass.image(f, Access::TransferWrite);
-        }
-        pass.record(|cmd| unsafe {
-            for f in &images {
-                d.cmd_clear_color_image(
-                    cmd,
-                    f.raw,
-                    vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                    &vk::ClearColorValue { float32: [0.0; 4] },
-                    &[f.full_range()],
-                );
-            }
-        });
-    }
-
     /// `suffix` tells the passes after the bounce apart in timings.
     pub fn record(&self, ctx: &Context, g: &mut Graph, volumes: &Volumes, suffix: &str) {
         let d = &ctx.device;
-        // Texels over the grid, at the base level and then each level: those past it (a padded
-        // base level) stay as record_clear_padding left them.
-        let m = volumes.grid.texels_over_grid();
+        let m = volumes.grid.aniso_resolution();
         let dispatch = |cmd, p: &Pipeline, set: &Set, size: u32| unsafe {
             d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, p.raw);
             d.cmd_bind_descriptor_sets(
@@ -153,8 +124,8 @@ impl Mip {
                 for f in volumes.directional() {
                     pass = pass.image(f, Access::ComputeStorageReadWrite);
                 }
-                let over_grid = m.div_ceil(1 << level);
-                pass.record(|cmd| dispatch(cmd, p, set, over_grid));
+                let size = (m >> level).max(1);
+                pass.record(|cmd| dispatch(cmd, p, set, size));
             }
         }
     }

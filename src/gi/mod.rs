@@ -162,27 +162,19 @@ impl VoxelGrid {
     pub fn voxel_size(&self) -> f32 {
         self.size / self.resolution as f32
     }
-    /// Texels per side of the directional volumes' base level: half the grid, rounded up, and
-    /// then (except for --paper) up to a power of two. A mip level of odd size drops its last
-    /// texel (Vulkan rounds mip sizes down), and the levels after it no longer line up with
-    /// the grid: their texels hold blocks of the level before that the sampler puts up to a
-    /// texel away.
-    pub fn aniso_resolution(&self, paper: bool) -> u32 {
-        let m = self.texels_over_grid();
-        if paper {
-            m
-        } else {
-            m.next_power_of_two()
-        }
-    }
-    /// Texels of the directional volumes' base level that hold the grid (half of it, rounded
-    /// up): all of them for --paper, the rest is padding.
-    pub fn texels_over_grid(&self) -> u32 {
+    /// Texels per side of the directional volumes' base level: half the grid, rounded up.
+    /// Vulkan rounds mip sizes down; the default's mip pass folds the texel a level of odd size
+    /// would drop into the last texel of the next (aniso_mip_volume.comp), so every level ends
+    /// where the grid does; `--paper` drops it. (Padded up to a power of two instead, the
+    /// levels lined up with the grid exactly, but walls at the grid's far end fell in coarse
+    /// texels mostly past it, and how much light a closed room kept depended on the grid's
+    /// size.)
+    pub fn aniso_resolution(&self) -> u32 {
         self.resolution.div_ceil(2)
     }
     /// Mip levels of the directional volumes (their base level down to 1 texel).
-    pub fn mip_levels(&self, paper: bool) -> u32 {
-        32 - self.aniso_resolution(paper).leading_zeros()
+    pub fn mip_levels(&self) -> u32 {
+        32 - self.aniso_resolution().leading_zeros()
     }
 }
 
@@ -363,14 +355,14 @@ impl Gi {
                 },
                 vk::DescriptorPoolSize {
                     ty: vk::DescriptorType::STORAGE_IMAGE,
-                    descriptor_count: 32 + 12 * grid.mip_levels(settings.paper),
+                    descriptor_count: 32 + 12 * grid.mip_levels(),
                 },
                 vk::DescriptorPoolSize {
                     ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
                     descriptor_count: 64,
                 },
             ],
-            16 + grid.mip_levels(settings.paper),
+            16 + grid.mip_levels(),
         )?;
         let paper = settings.paper;
         let voxelizer = Voxelizer::new(
@@ -476,9 +468,6 @@ impl Gi {
             return;
         }
         if let Some((inject, mip)) = &self.lighting {
-            if self.static_dirty {
-                mip.record_clear_padding(ctx, g, &self.volumes);
-            }
             inject.record(ctx, g, &self.volumes, scene_set, shadow_map, "");
             mip.record(ctx, g, &self.volumes, "");
             if let Some(b) = &self.bounce {
@@ -596,36 +585,51 @@ mod tests {
         assert!((g.origin + g.size)
             .cmpge(b.max + g.voxel_size() * 0.99)
             .all());
-        assert_eq!(VoxelGrid::fit(&b, 8).mip_levels(false), 3); // 4, 2, 1
-        assert_eq!(VoxelGrid::fit(&b, 37).mip_levels(true), 5); // 19, 9, 4, 2, 1
-                                                                // Padded to 32: 32, 16, 8, 4, 2, 1, each level exactly half the one before.
-        assert_eq!(VoxelGrid::fit(&b, 37).aniso_resolution(false), 32);
-        assert_eq!(VoxelGrid::fit(&b, 37).mip_levels(false), 6);
-        assert_eq!(VoxelGrid::fit(&b, 64).aniso_resolution(false), 32);
+        assert_eq!(VoxelGrid::fit(&b, 8).mip_levels(), 3); // 4, 2, 1
+        assert_eq!(VoxelGrid::fit(&b, 37).mip_levels(), 5); // 19, 9, 4, 2, 1
+        assert_eq!(VoxelGrid::fit(&b, 37).aniso_resolution(), 19);
+        assert_eq!(VoxelGrid::fit(&b, 64).aniso_resolution(), 32);
     }
 
     #[test]
-    fn every_mip_level_lines_up_with_the_grid() {
-        // The sampler puts texel i of level L (of m_L texels) at (i + 0.5) / m_L; the mip pass
-        // fills it with base texels [i 2^L, (i + 1) 2^L), whose centre lies at
-        // (i + 0.5) 2^L / m_0. They agree for every i when m_L 2^L = m_0.
+    fn every_mip_level_ends_where_the_grid_does() {
+        // Level L has max(1, m >> L) texels (Vulkan); texel i holds texels 2i and 2i + 1 of
+        // the level below, the last one also 2i + 2 where that level has an odd size
+        // (aniso_mip_volume.comp). Follow each texel's base texels down the chain: they tile
+        // the base level, and the last texel of every level reaches its end.
         let b = Aabb {
             min: Vec3::ZERO,
             max: Vec3::ONE,
         };
         for n in 2..=600 {
             let g = VoxelGrid::fit(&b, n);
-            let m = g.aniso_resolution(false);
+            let m = g.aniso_resolution();
             assert!(2 * m >= n, "{n}^3: {m} texels do not cover the grid");
-            for level in 0..g.mip_levels(false) {
+            // Each texel's range of base texels, level by level.
+            let mut ranges: Vec<(u32, u32)> = (0..m).map(|i| (i, i + 1)).collect();
+            for level in 1..g.mip_levels() {
                 let size = (m >> level).max(1);
+                let below = ranges.clone();
+                ranges = (0..size)
+                    .map(|i| {
+                        let lo = 2 * i as usize;
+                        let hi = if i + 1 == size { below.len() } else { lo + 2 };
+                        (below[lo].0, below[hi - 1].1)
+                    })
+                    .collect();
+                for w in ranges.windows(2) {
+                    assert_eq!(w[0].1, w[1].0, "{n}^3, level {level}: a gap or overlap");
+                }
+                assert_eq!(ranges[0].0, 0);
                 assert_eq!(
-                    size << level,
+                    ranges.last().unwrap().1,
                     m,
-                    "{n}^3, level {level}: {size} texels of {m}"
+                    "{n}^3, level {level}: the last texel stops short of the grid's end"
                 );
+                // No texel holds more than 3 of the level below along an axis.
+                assert!(below.len() <= 2 * size as usize + 1, "{n}^3, level {level}");
             }
-            assert_eq!(m >> (g.mip_levels(false) - 1), 1, "{n}^3 ends at one texel");
+            assert_eq!(ranges.len(), 1, "{n}^3 ends at one texel");
         }
     }
 }

@@ -230,8 +230,6 @@ impl Volumes {
         let usage = vk::ImageUsageFlags::STORAGE
             | vk::ImageUsageFlags::SAMPLED
             | vk::ImageUsageFlags::TRANSFER_SRC;
-        // The directional volumes' padding is cleared (mip.rs).
-        let padded_usage = usage | vk::ImageUsageFlags::TRANSFER_DST;
         let radiance = Image::new(ctx, "voxel radiance", ImageDesc::d3(format, n, usage))?;
         info.push(VolumeInfo {
             name: format!("voxel radiance ({format:?})"),
@@ -253,8 +251,8 @@ impl Volumes {
             });
             Some(Image::new(ctx, "voxel light direction", desc)?)
         };
-        let m = grid.aniso_resolution(settings.paper);
-        let levels = grid.mip_levels(settings.paper);
+        let m = grid.aniso_resolution();
+        let levels = grid.mip_levels();
         let names = ["-X", "+X", "-Y", "+Y", "-Z", "+Z"];
         let faces = names
             .iter()
@@ -262,7 +260,7 @@ impl Volumes {
                 Image::new(
                     ctx,
                     &format!("directional volume {f}"),
-                    ImageDesc::d3(format, m, padded_usage).mips(levels),
+                    ImageDesc::d3(format, m, usage).mips(levels),
                 )
             })
             .collect::<VkResult<Vec<_>>>()?;
@@ -279,7 +277,7 @@ impl Volumes {
             if settings.paper {
                 return Ok(None);
             }
-            let desc = ImageDesc::d3(vk::Format::R16G16B16A16_SFLOAT, m, padded_usage).mips(levels);
+            let desc = ImageDesc::d3(vk::Format::R16G16B16A16_SFLOAT, m, usage).mips(levels);
             info.push(VolumeInfo {
                 name: format!("directional {what}, {m}^3 with {levels} mips"),
                 bytes: face_bytes,
