@@ -1,18 +1,21 @@
 # Writes emitter-over-floor.gltf: a 4 m white floor (albedo 0.8, Lambertian) open to a black sky, a
 # 2 cm square emitter of strength 1e4 1 m above its middle facing down, a camera 3 m up looking
 # down. Usage: python3 emitter-over-floor.py emitter-over-floor.gltf [height]
-import json, struct, sys, base64
-def scene(path, s=0.02, h=1.0, strength=1e4, half=2.0, walls=False):
+import base64, json, struct, sys
+
+import numpy as np
+
+
+def scene(path, s=0.02, h=1.0, strength=1e4, half=2.0):
     quads = []  # (verts, normal, material)
     quads.append(([[-half,0,-half],[-half,0,half],[half,0,half],[half,0,-half]],[0,1,0],0))
     e=s/2
     quads.append(([[-e,h,-e],[e,h,-e],[e,h,e],[-e,h,e]],[0,-1,0],1))
-    pos=b''; nor=b''; idx=b''; prims=[]; bufviews=[]; acc=[]
+    prims=[]; bufviews=[]; acc=[]
     data=b''
     for qi,(v,n,m) in enumerate(quads):
         p=b''.join(struct.pack('<3f',*x) for x in v); nn=b''.join(struct.pack('<3f',*n) for _ in v)
-        # ensure winding matches normal
-        import numpy as np
+        # Wind each quad's triangles to face along its normal.
         a,b,c=[np.array(x) for x in v[:3]]
         tri=[0,1,2,0,2,3] if np.dot(np.cross(b-a,c-a),n)>0 else [0,2,1,0,3,2]
         ii=struct.pack('<6H',*tri)+b'\0\0'
@@ -35,5 +38,5 @@ def scene(path, s=0.02, h=1.0, strength=1e4, half=2.0, walls=False):
        "meshes":[{"primitives":prims}],"materials":mats,
        "buffers":[{"byteLength":len(data),"uri":"data:application/octet-stream;base64,"+base64.b64encode(data).decode()}],
        "bufferViews":bufviews,"accessors":acc}
-    json.dump(g,open(path,'w'))
+    json.dump(g, open(path, 'w'), indent=4)
 scene(sys.argv[1], h=float(sys.argv[2]) if len(sys.argv)>2 else 1.0)
