@@ -20,6 +20,21 @@ float seen_from(vec3 going, vec3 towards) {
     return clamp(1.0 + 2.0 * dot(going, towards), 0.0, 1.0);
 }
 
+#ifndef PAPER
+// An emitter smaller than its voxel sends its light along `going` (its normal, shorter where the
+// voxel's light spreads) by the cosine, but a voxel shows one radiance to every side. The share of
+// such light a face volume shows to a cone it comes back to along `towards`: all of it face on,
+// SMALL_SIDE at right angles. With the cones' dir^2 weights a cone at angle t from the normal
+// sees cos^2 t + SMALL_SIDE sin^2 t of it; SMALL_SIDE = 1/4 makes that send the emitter's own
+// power over the hemisphere (the cosine's), where the voxel sent twice.
+const float SMALL_SIDE = 0.25;
+float small_emitter_shown(vec3 going, vec3 towards) {
+    float len = length(going);
+    float c = len > 0.0 ? max(dot(going / len, towards), 0.0) : 1.0;
+    return mix(1.0, SMALL_SIDE + (1.0 - SMALL_SIDE) * c, min(len, 1.0));
+}
+#endif
+
 // block[x + 2y + 4z]: the 2x2x2 source texels; face 0..5 = -X, +X, -Y, +Y, -Z, +Z.
 vec4 reduce_block(vec4 block[8], int face) {
     int axis = face / 2;

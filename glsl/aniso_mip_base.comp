@@ -18,19 +18,27 @@ layout(set = 0, binding = 6, VOLUME_FORMAT) uniform writeonly image3D face_pz;
 layout(set = 0, binding = 7, rgba8_snorm) uniform readonly image3D emit_dir;
 layout(set = 0, binding = 8, rgba16f) uniform writeonly image3D light_dir;
 layout(set = 0, binding = 9, rgba16f) uniform writeonly image3D light_pos;
+// The luminance of each voxel's light that comes from emitters smaller than it
+// (inject_radiance.comp); one texel, not read, when the scene emits nothing.
+layout(set = 0, binding = 10, r32f) uniform readonly image3D small_emission;
 #endif
 
+#ifndef PAPER
 // A cone travelling along `face` sees a voxel's light only if the voxel sends it back against
 // the cone's travel (emit_dir, from inject_radiance.comp: where its light goes): fully for
 // directions up to the surface's plane, fading to nothing 30 degrees behind it. The paper's
 // voxels shine every way, so a wall's lit side shows through its back (light leaks) and a
 // cone leaving a surface sees the emitter beside it in the same plane. The opacity stays: a
 // surface blocks light from both sides.
-vec4 facing(vec4 v, vec3 dir, int face) {
+// `small`: the share of the voxel's light from emitters smaller than it, shown to the side by
+// the cosine (small_emitter_shown).
+vec4 facing(vec4 v, vec3 dir, float small, int face) {
     vec3 towards = vec3(0.0);
     towards[face / 2] = (face % 2 == 0) ? 1.0 : -1.0;  // against the cone's travel
-    return vec4(v.rgb * seen_from(dir, towards), v.a);
+    float shown = seen_from(dir, towards) * (1.0 - small * (1.0 - small_emitter_shown(dir, towards)));
+    return vec4(v.rgb * shown, v.a);
 }
+#endif
 
 void main() {
     ivec3 c = ivec3(gl_GlobalInvocationID);
@@ -38,6 +46,8 @@ void main() {
     vec4 block[8];
 #ifndef PAPER
     vec4 dirs[8];
+    float small[8];
+    bool emits = imageSize(small_emission) == imageSize(radiance);
 #endif
     for (int i = 0; i < 8; i++) {
         ivec3 s = 2 * c + ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1);
@@ -46,6 +56,9 @@ void main() {
         block[i] = inside ? imageLoad(radiance, s) : vec4(0.0);
 #ifndef PAPER
         dirs[i] = inside ? imageLoad(emit_dir, s) : vec4(0.0);
+        float e = inside && emits ? imageLoad(small_emission, s).r : 0.0;
+        float l = dot(block[i].rgb, vec3(0.2126, 0.7152, 0.0722));
+        small[i] = l > 0.0 ? clamp(e / l, 0.0, 1.0) : 0.0;
 #endif
     }
 #ifdef PAPER
@@ -76,7 +89,7 @@ void main() {
     imageStore(light_pos, c, vec4(lies * 0.125, 0.0));
     for (int face = 0; face < 6; face++) {
         vec4 shown[8];
-        for (int i = 0; i < 8; i++) shown[i] = facing(block[i], dirs[i].xyz, face);
+        for (int i = 0; i < 8; i++) shown[i] = facing(block[i], dirs[i].xyz, small[i], face);
         vec4 r = reduce_block(shown, face);
         if (face == 0) imageStore(face_nx, c, r);
         else if (face == 1) imageStore(face_px, c, r);

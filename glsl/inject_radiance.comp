@@ -23,6 +23,9 @@ layout(set = 1, binding = 5, rgba16f) uniform writeonly image3D radiance;
 // where it spreads (bent surfaces, light on both sides), zero for every way; in w, where along it
 // the voxel's surfaces lie from its centre (in voxels).
 layout(set = 1, binding = 6, rgba8_snorm) uniform writeonly image3D emit_dir;
+// The luminance of the emission that comes from emitters covering less than the voxel, which
+// cones see less of from the side (aniso_mip_base.comp). One texel when nothing emits.
+layout(set = 1, binding = 10, r32f) uniform writeonly image3D small_emission;
 #endif
 
 // Visibility of the light by marching the voxels (--voxel-shadows), from two voxels out, one
@@ -55,6 +58,7 @@ void main() {
         imageStore(radiance, c, vec4(0.0));
 #ifndef PAPER
         imageStore(emit_dir, c, vec4(0.0));
+        if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u) imageStore(small_emission, c, vec4(0.0));
 #endif
         return;
     }
@@ -111,6 +115,11 @@ void main() {
     // w: how far in front of the centre the voxel's surfaces lie, along that direction.
     float along = dot(dir, dir) > 0.0 ? dot(v.offset, normalize(dir)) : 0.0;
     imageStore(emit_dir, c, vec4(dir, along));
+    if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u) {
+        // An emitter that covers only part of the voxel is smaller than it (or its edge).
+        float small = 1.0 - min(v.emitter_cover, 1.0);
+        imageStore(small_emission, c, vec4(luminance(v.emission) * small * frame.tuning.y));
+    }
 #endif
     imageStore(radiance, c, vec4(outgoing * frame.tuning.y, 1.0));
 }

@@ -13,6 +13,7 @@ struct Voxel {
     float agreement;    // length of the averaged unit normals: 1 flat, ~0 opposite faces
     vec3 axis_weights;  // mean squared normal: how much the surfaces face each axis (sums to 1)
     vec3 emission;
+    float emitter_cover; // of the voxel's face, by its emitters (0 to 1 or more; default only)
     vec3 offset;        // where its surfaces lie from its centre, mean, in voxels
 };
 
@@ -88,6 +89,7 @@ Voxel load_voxel(ivec3 c) {
     v.offset = vec3(0.0);
     v.offset[axis] = float(off) * inv;
     v.emission = vec3(0.0);
+    v.emitter_cover = 0.0;
     if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u && v.filled) {
         uint j = voxel_index(c) * EMISSION_STRIDE;
         uvec3 e = uvec3(static_emission[j], static_emission[j + 1u], static_emission[j + 2u]);
@@ -99,7 +101,8 @@ Voxel load_voxel(ivec3 c) {
 
         // Sum of coverage-weighted emission over the emitters' coverage, or over 1 when they
         // cover less than the voxel (voxelize.frag).
-        v.emission = vec3(e) / (max(float(cov) / FIXED_ONE, 1.0) * frame.cone.w);
+        v.emitter_cover = float(cov) / FIXED_ONE;
+        v.emission = vec3(e) / (max(v.emitter_cover, 1.0) * frame.cone.w);
     }
     return v;
 }

@@ -73,6 +73,9 @@ impl Inject {
         if let Some(dir) = &volumes.emit_dir {
             descs.push((6, Desc::StorageImage(dir.view)));
         }
+        if let Some(small) = &volumes.small_emission {
+            descs.push((10, Desc::StorageImage(small.view)));
+        }
         let set = pool.set(vk::ShaderStageFlags::COMPUTE, &descs)?;
         let shader = if paper {
             "inject_radiance.comp:PAPER"
@@ -101,6 +104,9 @@ impl Inject {
             .image(&volumes.radiance, Access::ComputeStorageWrite);
         if let Some(dir) = &volumes.emit_dir {
             pass = pass.image(dir, Access::ComputeStorageWrite);
+        }
+        if let Some(small) = &volumes.small_emission {
+            pass = pass.image(small, Access::ComputeStorageWrite);
         }
         pass.record(|cmd| unsafe {
             self.pipeline

@@ -30,6 +30,9 @@ impl Mip {
         if let Some(dir) = &volumes.emit_dir {
             descs.push((7, Desc::StorageImage(dir.view)));
         }
+        if let Some(small) = &volumes.small_emission {
+            descs.push((10, Desc::StorageImage(small.view)));
+        }
         if let Some(dir) = &volumes.light_dir {
             descs.push((8, Desc::StorageImage(dir.level_view(0))));
         }
@@ -110,6 +113,9 @@ impl Mip {
             .image(&volumes.radiance, Access::ComputeStorageRead);
         if let Some(dir) = &volumes.emit_dir {
             pass = pass.image(dir, Access::ComputeStorageRead);
+        }
+        if let Some(small) = &volumes.small_emission {
+            pass = pass.image(small, Access::ComputeStorageRead);
         }
         for f in volumes.directional() {
             pass = pass.image(f, Access::ComputeStorageWrite);

@@ -113,6 +113,12 @@ pub struct Volumes {
     /// see it only from in front of its surface. None for --paper, whose voxels shine every
     /// way.
     pub emit_dir: Option<Image>,
+    /// Of each voxel's emission, the luminance (times the radiance scale) that comes from
+    /// emitters covering less than the voxel (R32F). Such an emitter sends its light mostly
+    /// along its normal, by the cosine, where a voxel shows one radiance to every side: from the
+    /// side, cones see only part of it (aniso_mip_base.comp). One texel, never read, when the
+    /// scene emits nothing; None for --paper.
+    pub small_emission: Option<Image>,
     /// The six directional volumes (-X, +X, -Y, +Y, -Z, +Z) with full mip chains.
     pub faces: Vec<Image>,
     /// Beside the directional volumes, texel for texel: where their light goes (xyz, the
@@ -251,6 +257,24 @@ impl Volumes {
             });
             Some(Image::new(ctx, "voxel light direction", desc)?)
         };
+        let small_emission = if settings.paper {
+            None
+        } else {
+            // The bindings stay; a scene without emitters gets a one-texel stand-in.
+            let side = if emissive { n } else { 1 };
+            let desc = ImageDesc::d3(
+                vk::Format::R32_SFLOAT,
+                side,
+                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED,
+            );
+            if emissive {
+                info.push(VolumeInfo {
+                    name: "voxel emission of small emitters (R32F)".into(),
+                    bytes: voxels * 4,
+                });
+            }
+            Some(Image::new(ctx, "voxel emission of small emitters", desc)?)
+        };
         let m = grid.aniso_resolution();
         let levels = grid.mip_levels();
         let names = ["-X", "+X", "-Y", "+Y", "-Z", "+Z"];
@@ -313,6 +337,7 @@ impl Volumes {
             data,
             radiance,
             emit_dir,
+            small_emission,
             faces,
             light_dir,
             light_pos,
