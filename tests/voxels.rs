@@ -552,3 +552,45 @@ fn voxels_keep_the_diffuse_albedo_only() {
         }
     }
 }
+
+#[test]
+fn the_readback_holds_the_directional_volumes_and_small_emitters() {
+    // A 2 cm emitter over a floor on an odd grid (37^3: directional volumes of 19^3 and five
+    // levels, the last texel of odd levels folded): the debug readback that the hard cases
+    // check for non-finite values covers every level of the eight directional volumes and the
+    // volume of small emitters' light.
+    let n = 37;
+    let s = lamp_over_floor(2.0, 0.01, 1.0, 1e4);
+    let d = render_voxels(&s, voxel_settings(n, false, Mode::Full));
+    let grid = VoxelGrid::fit(&s.bounds, n);
+    let m = grid.aniso_resolution();
+    let per_volume: u64 = (0..grid.mip_levels())
+        .map(|l| ((m >> l).max(1) as u64).pow(3))
+        .sum();
+    let dir = d.directional.expect("directional volumes read back");
+    assert_eq!(dir.len() as u64, 8 * per_volume);
+    assert!(dir.iter().all(|t| t.is_finite()));
+    assert!(
+        dir.iter().any(|t| t.x > 0.0),
+        "no light in the directional volumes"
+    );
+    let small = d.small_emission.expect("small emitters' volume read back");
+    assert_eq!(small.len(), d.filled.len());
+    // Light only where an emitter is, at most the voxel's emission (the radiance scale is 1).
+    for (i, &e) in small.iter().enumerate() {
+        let lum = d.emission[i].dot(Vec3::new(0.2126, 0.7152, 0.0722));
+        assert!(
+            e.is_finite() && e >= 0.0 && e <= lum * 1.0001 + 1e-6,
+            "voxel {i}: small emitters' light {e}, emission luminance {lum}"
+        );
+    }
+    assert!(
+        small.iter().any(|&e| e > 0.0),
+        "the 2 cm emitter is not small"
+    );
+    // Without emitters the volume is a stand-in, not read back.
+    let plain = lamp_over_floor(2.0, 0.01, 1.0, 0.0);
+    let d = render_voxels(&plain, voxel_settings(n, false, Mode::Full));
+    assert!(d.small_emission.is_none());
+    assert!(d.directional.is_some());
+}

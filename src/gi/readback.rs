@@ -21,6 +21,13 @@ pub struct VoxelDump {
     pub emission: Vec<Vec3>,
     /// Outgoing radiance and opacity, when the voxels are lit.
     pub radiance: Option<Vec<Vec4>>,
+    /// When the voxels are lit (default mode): every texel of every level of the directional
+    /// volumes and of the volumes beside them (light direction and position), in the order of
+    /// `Volumes::directional`, level by level; as stored (radiance times the radiance scale).
+    pub directional: Option<Vec<Vec4>>,
+    /// When the voxels are lit and the scene emits (default mode): the emission of emitters
+    /// smaller than their voxel, as stored.
+    pub small_emission: Option<Vec<f32>>,
 }
 
 impl VoxelDump {
@@ -72,12 +79,14 @@ impl Gi {
     ) -> VkResult<VoxelDump> {
         let n = self.volumes.grid.resolution;
         let voxels = (n as u64).pow(3);
-        // Sources: (buffer, or image with bytes per texel), in a fixed order.
+        // Sources: a buffer, or one mip level of an image (bytes per texel, level, side), in a
+        // fixed order.
         enum Src<'a> {
             Buf(&'a Buffer),
-            Img(&'a Image, u64),
+            Img(&'a Image, u64, u32, u32),
         }
-        let mut sources: Vec<(&str, Src)> = Vec::new();
+        let mut sources: Vec<(String, Src)> = Vec::new();
+        let mut directional_names = Vec::new();
         match &self.volumes.data {
             VoxelData::Sums {
                 static_sums,
@@ -89,10 +98,10 @@ impl Gi {
                 ];
                 for ([a, n, e], sums) in passes {
                     let Some(sums) = sums else { continue };
-                    sources.push((a, Src::Buf(&sums.albedo)));
-                    sources.push((n, Src::Buf(&sums.normal)));
+                    sources.push((a.into(), Src::Buf(&sums.albedo)));
+                    sources.push((n.into(), Src::Buf(&sums.normal)));
                     if let Some(b) = &sums.emission {
-                        sources.push((e, Src::Buf(b)));
+                        sources.push((e.into(), Src::Buf(b)));
                     }
                 }
             }
@@ -102,25 +111,52 @@ impl Gi {
                 emission,
                 ..
             } => {
-                sources.push(("pa", Src::Buf(albedo)));
-                sources.push(("pn", Src::Buf(normal)));
+                sources.push(("pa".into(), Src::Buf(albedo)));
+                sources.push(("pn".into(), Src::Buf(normal)));
                 if let Some(e) = emission {
-                    sources.push(("pe", Src::Buf(e)));
+                    sources.push(("pe".into(), Src::Buf(e)));
                 }
             }
         }
         if self.lighting.is_some() {
             let texel = if self.settings.paper { 4 } else { 8 };
-            sources.push(("r", Src::Img(&self.volumes.radiance, texel)));
+            sources.push(("r".into(), Src::Img(&self.volumes.radiance, texel, 0, n)));
+            // The paper's directional volumes are RGBA8: nothing in them can be non-finite.
+            if !self.settings.paper {
+                for (i, img) in self.volumes.directional().enumerate() {
+                    let side = img.desc.extent.width;
+                    for level in 0..img.desc.mip_levels {
+                        let name = format!("directional {i} level {level}");
+                        directional_names.push(name.clone());
+                        sources.push((name, Src::Img(img, 8, level, (side >> level).max(1))));
+                    }
+                }
+                if let Some(small) = &self.volumes.small_emission {
+                    // A one-texel stand-in unless the scene emits.
+                    if small.desc.extent.width == n {
+                        sources.push(("small".into(), Src::Img(small, 4, 0, n)));
+                    }
+                }
+            }
         }
         let sizes: Vec<u64> = sources
             .iter()
             .map(|(_, s)| match s {
                 Src::Buf(b) => b.size,
-                Src::Img(_, t) => voxels * t,
+                Src::Img(_, t, _, side) => (*side as u64).pow(3) * t,
             })
             .collect();
-        let total: u64 = sizes.iter().sum();
+        // Each part starts 16-byte aligned: an image's copy must start at a multiple of its
+        // texel size (a grid of odd size leaves the buffers before it a multiple of 4 only).
+        let offsets: Vec<u64> = sizes
+            .iter()
+            .scan(0u64, |end, size| {
+                let start = end.next_multiple_of(16);
+                *end = start + size;
+                Some(start)
+            })
+            .collect();
+        let total = offsets.last().zip(sizes.last()).map_or(0, |(o, s)| o + s);
         let host = Buffer::new(
             ctx,
             "voxel readback",
@@ -136,12 +172,11 @@ impl Gi {
             for (_, s) in &sources {
                 pass = match s {
                     Src::Buf(b) => pass.buffer(b, Access::TransferRead),
-                    Src::Img(i, _) => pass.image(i, Access::TransferRead),
+                    Src::Img(i, ..) => pass.image(i, Access::TransferRead),
                 };
             }
             pass.record(|cmd| unsafe {
-                let mut offset = 0;
-                for ((_, s), size) in sources.iter().zip(&sizes) {
+                for (((_, s), size), &offset) in sources.iter().zip(&sizes).zip(&offsets) {
                     match s {
                         Src::Buf(b) => ctx.device.cmd_copy_buffer(
                             cmd,
@@ -153,7 +188,7 @@ impl Gi {
                                 size: *size,
                             }],
                         ),
-                        Src::Img(i, _) => ctx.device.cmd_copy_image_to_buffer(
+                        Src::Img(i, _, level, side) => ctx.device.cmd_copy_image_to_buffer(
                             cmd,
                             i.raw,
                             vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
@@ -162,18 +197,17 @@ impl Gi {
                                 .buffer_offset(offset)
                                 .image_subresource(vk::ImageSubresourceLayers {
                                     aspect_mask: vk::ImageAspectFlags::COLOR,
-                                    mip_level: 0,
+                                    mip_level: *level,
                                     base_array_layer: 0,
                                     layer_count: 1,
                                 })
                                 .image_extent(vk::Extent3D {
-                                    width: n,
-                                    height: n,
-                                    depth: n,
+                                    width: *side,
+                                    height: *side,
+                                    depth: *side,
                                 })],
                         ),
                     }
-                    offset += size;
                 }
             });
             g.pass("voxel readback to host")
@@ -185,10 +219,9 @@ impl Gi {
 
         let bytes = host.mapped().expect("readback is host-visible");
         let mut parts = std::collections::HashMap::new();
-        let mut offset = 0usize;
-        for ((name, _), size) in sources.iter().zip(&sizes) {
-            parts.insert(*name, &bytes[offset..offset + *size as usize]);
-            offset += *size as usize;
+        for (((name, _), size), &offset) in sources.iter().zip(&sizes).zip(&offsets) {
+            let offset = offset as usize;
+            parts.insert(name.as_str(), &bytes[offset..offset + *size as usize]);
         }
         let nv = voxels as usize;
         let mut dump = VoxelDump {
@@ -199,6 +232,8 @@ impl Gi {
             normal: vec![Vec3::ZERO; nv],
             emission: vec![Vec3::ZERO; nv],
             radiance: None,
+            directional: None,
+            small_emission: None,
         };
         if let (Some(sa), Some(sn)) = (parts.get("sa"), parts.get("sn")) {
             let (sa, sn) = (words(sa), words(sn));
@@ -260,6 +295,26 @@ impl Gi {
                 }
             }
         }
+        let halves = |b: &[u8]| -> Vec<Vec4> {
+            b.chunks_exact(8)
+                .map(|c| {
+                    let h = |i: usize| f16_to_f32(u16::from_le_bytes([c[i], c[i + 1]]));
+                    Vec4::new(h(0), h(2), h(4), h(6))
+                })
+                .collect()
+        };
+        let directional: Vec<Vec4> = directional_names
+            .iter()
+            .flat_map(|name| halves(parts[name.as_str()]))
+            .collect();
+        if !directional.is_empty() {
+            dump.directional = Some(directional);
+        }
+        dump.small_emission = parts.get("small").map(|b| {
+            b.chunks_exact(4)
+                .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                .collect()
+        });
         if let Some(r) = parts.get("r") {
             let texels: Vec<Vec4> = if self.settings.paper {
                 words(r)
@@ -267,12 +322,7 @@ impl Gi {
                     .map(|w| unpack_rgba8(w) / 255.0)
                     .collect()
             } else {
-                r.chunks_exact(8)
-                    .map(|c| {
-                        let h = |i: usize| f16_to_f32(u16::from_le_bytes([c[i], c[i + 1]]));
-                        Vec4::new(h(0), h(2), h(4), h(6))
-                    })
-                    .collect()
+                halves(r)
             };
             // Back to radiance: the volume holds it times the radiance scale.
             let k = self.radiance_scale;

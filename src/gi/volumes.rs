@@ -265,7 +265,9 @@ impl Volumes {
             let desc = ImageDesc::d3(
                 vk::Format::R32_SFLOAT,
                 side,
-                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED,
+                vk::ImageUsageFlags::STORAGE
+                    | vk::ImageUsageFlags::SAMPLED
+                    | vk::ImageUsageFlags::TRANSFER_SRC,
             );
             if emissive {
                 info.push(VolumeInfo {

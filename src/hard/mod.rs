@@ -262,6 +262,26 @@ impl Env {
                 self.non_finite
                     .push(format!("volumes: {bad} non-finite voxels"));
             }
+            let bad = v
+                .directional
+                .iter()
+                .flatten()
+                .filter(|t| !t.is_finite())
+                .count();
+            if bad > 0 {
+                self.non_finite
+                    .push(format!("directional volumes: {bad} non-finite texels"));
+            }
+            let bad = v
+                .small_emission
+                .iter()
+                .flatten()
+                .filter(|e| !e.is_finite())
+                .count();
+            if bad > 0 {
+                self.non_finite
+                    .push(format!("small emitters' volume: {bad} non-finite voxels"));
+            }
         }
         Ok(img)
     }
