@@ -12,7 +12,6 @@
 layout(set = CONE_SET, binding = 0) uniform sampler3D radiance_tex;
 #ifndef PAPER
 layout(set = CONE_SET, binding = 8) uniform sampler3D emit_dir_tex;
-layout(set = CONE_SET, binding = 10) uniform sampler3D small_emission_tex;
 #endif
 #endif
 layout(set = CONE_SET, binding = 1) uniform sampler3D aniso_nx;
@@ -101,16 +100,6 @@ vec4 full_res_seen(vec3 uvw, vec3 dir, vec3 from) {
         // panel see its lit side at its foot, more with each bounce.
         float front = clamp(1.0 + dot(from - lies, g) * float(64 * n), 0.0, 1.0);
         float shown = seen_from(g, -dir) * front;
-        if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u) {
-            // A small emitter's light as the face volumes show it (aniso_mip_base.comp).
-            float l = luminance(v.rgb);
-            float small = l > 0.0 ? clamp(texelFetch(small_emission_tex, c, 0).r / l, 0.0, 1.0) : 0.0;
-            vec3 d2 = dir * dir;
-            float side = d2.x * small_emitter_shown(g, vec3(-sign(dir.x), 0.0, 0.0))
-                       + d2.y * small_emitter_shown(g, vec3(0.0, -sign(dir.y), 0.0))
-                       + d2.z * small_emitter_shown(g, vec3(0.0, 0.0, -sign(dir.z)));
-            shown *= 1.0 - small * (1.0 - side);
-        }
         sum += wk.x * wk.y * wk.z * vec4(v.rgb * shown, v.a);
     }
     return sum;

@@ -36,9 +36,6 @@ pub fn cone_set(pool: &DescriptorPool, volumes: &Volumes, full_res: bool) -> VkR
         if let Some(dir) = &volumes.emit_dir {
             descs.push((8, Desc::Sampled(dir.view, s)));
         }
-        if let Some(small) = &volumes.small_emission {
-            descs.push((10, Desc::Sampled(small.view, s)));
-        }
     }
     for (i, f) in volumes.faces.iter().enumerate() {
         descs.push((1 + i as u32, Desc::Sampled(f.view, s)));

@@ -125,9 +125,6 @@ impl Trace {
         if let Some(dir) = &volumes.emit_dir {
             pass = pass.image(dir, Access::ComputeSampled);
         }
-        if let Some(small) = &volumes.small_emission {
-            pass = pass.image(small, Access::ComputeSampled);
-        }
         for f in volumes.directional() {
             pass = pass.image(f, Access::ComputeSampled);
         }
