@@ -79,9 +79,10 @@ USAGE:
                --paper and the defaults at --voxels (default 64), --size (default 64)
                pixels and --bounces (default 2), under validation; prints (and writes to
                --out) the markdown table of docs/hard-cases.md; fails when a default setting
-               misses its goal; --ideal adds a column: the reference path tracer limited
-               to the default column's bounces (reference --bounces) in place of the
-               real-time image, for the cases measured against the reference
+               misses its goal; --ideal adds two columns, for the cases measured against
+               the reference: the default image's relMSE against the reference path
+               tracer limited to the default column's bounces (reference --bounces), and
+               that path tracer's own score in place of the real-time image
   compare      prints one JSON line: relMSE, MAE, RMSE (radiance) and FLIP (display images)
   bench        times each setting of a sweep (per-pass GPU medians and frame wall time over
                --frames, default 10, after --warmup, default 2) and measures its error
@@ -789,7 +790,8 @@ fn hard_cases(args: &Args) -> Result<()> {
                 "  FAILS"
             },
             default.ideal.map_or(String::new(), |v| format!(
-                "  (path tracer, same bounces: {v:.5})"
+                "  (path tracer, same bounces: {v:.5}; the defaults against it: {:.5})",
+                default.cones.unwrap_or(f64::NAN)
             ))
         );
         rows.push(Row {

@@ -145,10 +145,23 @@ fn the_ideal_column_is_the_path_tracer_with_the_same_bounces() {
             "{b} bounces: {} beats the ideal",
             default.value
         );
+        // The real-time image against that path tracer's: what is left is the cones' own
+        // error, far less than what the missing bounces cost (the relative error squared).
+        let cones = default.cones.expect("no error against the ideal");
+        assert!(
+            cones > 0.0 && cones < default.value * default.value,
+            "{b} bounces: relMSE {cones} against the path tracer with as many bounces, {} \
+             against the exact answer",
+            default.value
+        );
         env.ideal = true;
         let paper = env.run(case, &env.settings(true));
         env.ideal = false;
         assert!(paper.ideal.is_none(), "--paper got an ideal value");
+        assert!(
+            paper.cones.is_none(),
+            "--paper got an error against the ideal"
+        );
         rows.push(voxgi::hard::Row {
             case,
             paper,
@@ -165,8 +178,12 @@ fn the_ideal_column_is_the_path_tracer_with_the_same_bounces() {
         "{table}"
     );
     for (line, row) in table.lines().skip(2).zip(&rows) {
-        let cell = format!("| {:.4} |", row.default.ideal.unwrap());
-        assert!(line.ends_with(&cell), "{line} does not end with {cell}");
+        let cells = format!(
+            "| {:.4} | {:.4} |",
+            row.default.cones.unwrap(),
+            row.default.ideal.unwrap()
+        );
+        assert!(line.ends_with(&cells), "{line} does not end with {cells}");
     }
 }
 

@@ -378,9 +378,9 @@ pub static CASES: &[Case] = &[
         run: |env, gi| {
             let (b, cam) = furnace(0.5, 1.0);
             let s = env.load("furnace", &b)?;
-            let m = mean(&env.render(&s, &cam, gi)?);
-            env.measure_ideal(&s, &cam, gi, |img| (mean(img) / 2.0 - 1.0).abs());
-            Ok((m / 2.0 - 1.0).abs())
+            let img = env.render(&s, &cam, gi)?;
+            env.measure_ideal(&s, &cam, gi, &img, |ideal| (mean(ideal) / 2.0 - 1.0).abs());
+            Ok((mean(&img) / 2.0 - 1.0).abs())
         },
     },
 ];

@@ -70,6 +70,8 @@ pub struct Env {
     pub ideal: bool,
     /// That measure for the current case.
     ideal_value: Option<f64>,
+    /// And the real-time image's relMSE against that reference, for the current case.
+    cones_value: Option<f64>,
     scratch: PathBuf,
     /// Non-finite pixels or voxels met by the current case.
     non_finite: Vec<String>,
@@ -89,6 +91,9 @@ pub struct Outcome {
     pub error: Option<String>,
     /// With [`Env::ideal`]: what the reference path tracer limited to the same bounces scores.
     pub ideal: Option<f64>,
+    /// With [`Env::ideal`]: relMSE of the real-time image against that path tracer's, the
+    /// error the bounces it models leave (the cones' own, not the missing bounces').
+    pub cones: Option<f64>,
 }
 
 impl Outcome {
@@ -113,6 +118,7 @@ impl Env {
             bounces: GiSettings::default().bounces,
             ideal: false,
             ideal_value: None,
+            cones_value: None,
             scratch,
             non_finite: Vec::new(),
             warnings: Vec::new(),
@@ -138,6 +144,7 @@ impl Env {
         self.non_finite.clear();
         self.warnings.clear();
         self.ideal_value = None;
+        self.cones_value = None;
         let before = self.ctx.stats.count();
         let result = (case.run)(self, gi);
         let validation_messages = self.ctx.stats.count() - before;
@@ -151,6 +158,7 @@ impl Env {
             validation_messages,
             error,
             ideal: self.ideal_value.take(),
+            cones: self.cones_value.take(),
         }
     }
 
@@ -328,24 +336,27 @@ impl Env {
     ) -> Result<f64> {
         let img = self.render(scene, camera, gi)?;
         let reference = self.reference(scene, camera, None);
-        self.measure_ideal(scene, camera, gi, |ideal| {
+        self.measure_ideal(scene, camera, gi, &img, |ideal| {
             crate::metrics::compare(ideal, &reference).rel_mse
         });
         Ok(crate::metrics::compare(&img, &reference).rel_mse)
     }
 
     /// With [`Env::ideal`] (and not `--paper`): `measure` of the reference limited to `gi`'s
-    /// bounces, kept as the case's [`Outcome::ideal`].
+    /// bounces, kept as the case's [`Outcome::ideal`], and the relMSE of `img`, the real-time
+    /// image, against it ([`Outcome::cones`]).
     pub fn measure_ideal(
         &mut self,
         scene: &Scene,
         camera: &Camera,
         gi: &GiSettings,
+        img: &RadianceImage,
         measure: impl FnOnce(&RadianceImage) -> f64,
     ) {
         if self.ideal && !gi.paper {
-            let img = self.reference(scene, camera, Some(gi.bounces));
-            self.ideal_value = Some(measure(&img));
+            let ideal = self.reference(scene, camera, Some(gi.bounces));
+            self.ideal_value = Some(measure(&ideal));
+            self.cones_value = Some(crate::metrics::compare(img, &ideal).rel_mse);
         }
     }
 }
@@ -421,10 +432,13 @@ fn cell(o: &Outcome, goal: Goal) -> String {
 }
 
 /// The markdown table of docs/hard-cases.md; `default` heads the defaults' column, `ideal`
-/// adds the column of [`Outcome::ideal`].
+/// adds the columns of [`Outcome::cones`] and [`Outcome::ideal`].
 pub fn table(rows: &[Row], default: &str, ideal: bool) -> String {
     let (extra, rule) = if ideal {
-        (" path tracer, same bounces |", "---|")
+        (
+            " default against the path tracer, same bounces | path tracer, same bounces |",
+            "---|---|",
+        )
     } else {
         ("", "")
     };
@@ -434,10 +448,10 @@ pub fn table(rows: &[Row], default: &str, ideal: bool) -> String {
     );
     for r in rows {
         let c = r.case;
-        let ideal_cell = match (ideal, r.default.ideal) {
-            (false, _) => String::new(),
-            (true, Some(v)) => format!(" {v:.4} |"),
-            (true, None) => " - |".to_string(),
+        let value = |v: Option<f64>| v.map_or(" - |".to_string(), |v| format!(" {v:.4} |"));
+        let ideal_cell = match ideal {
+            false => String::new(),
+            true => value(r.default.cones) + &value(r.default.ideal),
         };
         s.push_str(&format!(
             "| `{}` | {} | {} | {} | {} | {} | {} |{}\n",
