@@ -47,6 +47,7 @@ void main() {
 #ifndef PAPER
     vec4 dirs[8];
     float small[8];
+    // The stand-in is one texel; a grid has at least two voxels a side (VoxelGrid::fit).
     bool emits = imageSize(small_emission) == imageSize(radiance);
 #endif
     for (int i = 0; i < 8; i++) {
