@@ -258,37 +258,31 @@ impl Env {
         };
         self.check_image("image", &img);
         if let Some(v) = r.read_voxels()? {
-            let mut bad = 0;
-            for i in 0..v.filled.len() {
-                let finite = v.albedo[i].is_finite()
-                    && v.normal[i].is_finite()
-                    && v.emission[i].is_finite()
-                    && v.radiance.as_ref().is_none_or(|r| r[i].is_finite());
-                bad += usize::from(!finite);
-            }
-            if bad > 0 {
-                self.non_finite
-                    .push(format!("volumes: {bad} non-finite voxels"));
-            }
-            let bad = v
-                .directional
-                .iter()
-                .flatten()
-                .filter(|t| !t.is_finite())
+            let voxels = (0..v.filled.len())
+                .filter(|&i| {
+                    !(v.albedo[i].is_finite()
+                        && v.normal[i].is_finite()
+                        && v.emission[i].is_finite()
+                        && v.radiance.as_ref().is_none_or(|r| r[i].is_finite()))
+                })
                 .count();
-            if bad > 0 {
-                self.non_finite
-                    .push(format!("directional volumes: {bad} non-finite texels"));
-            }
-            let bad = v
-                .small_emission
-                .iter()
-                .flatten()
-                .filter(|e| !e.is_finite())
-                .count();
-            if bad > 0 {
-                self.non_finite
-                    .push(format!("small emitters' volume: {bad} non-finite voxels"));
+            let directional = v.directional.iter().flatten();
+            let small = v.small_emission.iter().flatten();
+            for (what, bad) in [
+                ("voxels", voxels),
+                (
+                    "directional volume texels",
+                    directional.filter(|t| !t.is_finite()).count(),
+                ),
+                (
+                    "small emitters' voxels",
+                    small.filter(|e| !e.is_finite()).count(),
+                ),
+            ] {
+                if bad > 0 {
+                    self.non_finite
+                        .push(format!("volumes: {bad} non-finite {what}"));
+                }
             }
         }
         Ok(img)
