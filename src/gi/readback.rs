@@ -131,11 +131,9 @@ impl Gi {
                         sources.push((name, Src::Img(img, 8, level, (side >> level).max(1))));
                     }
                 }
-                if let Some(small) = &self.volumes.small_emission {
-                    // A one-texel stand-in unless the scene emits.
-                    if small.desc.extent.width == n {
-                        sources.push(("small".into(), Src::Img(small, 4, 0, n)));
-                    }
+                // Without emitters the volume is a one-texel stand-in.
+                if let (Some(small), true) = (&self.volumes.small_emission, self.emissive) {
+                    sources.push(("small".into(), Src::Img(small, 4, 0, n)));
                 }
             }
         }

@@ -262,12 +262,11 @@ impl Volumes {
         } else {
             // The bindings stay; a scene without emitters gets a one-texel stand-in.
             let side = if emissive { n } else { 1 };
+            // Storage only: the inject pass writes it, the mip pass reads it, the readback copies it.
             let desc = ImageDesc::d3(
                 vk::Format::R32_SFLOAT,
                 side,
-                vk::ImageUsageFlags::STORAGE
-                    | vk::ImageUsageFlags::SAMPLED
-                    | vk::ImageUsageFlags::TRANSFER_SRC,
+                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
             );
             if emissive {
                 info.push(VolumeInfo {
