@@ -3,7 +3,10 @@
 // Second bounce (the paper's inject_propagation): every voxel gathers the light the directional
 // volumes hold around it with diffuse cones and adds what it reflects to its radiance; the mip
 // passes then run again. Default: the pixel pass's cone set and albedo / pi; a two-sided voxel
-// gathers both sides. PAPER: 4 cones of aperture 1, weights pi/3 and 2pi/9, clamped to 1.
+// gathers both sides. What a voxel reflects is kept aside for bounce_tail.comp, which adds it
+// (on the last bounce with the bounces not traced), and each voxel's albedo times the share of
+// its hemisphere the cones found closed is summed for it. PAPER: 4 cones of aperture 1, weights
+// pi/3 and 2pi/9, clamped to 1, added to the radiance here.
 #include "common.glsl"
 #include "voxel_common.glsl"
 #define VOXEL_SET 1
@@ -24,17 +27,24 @@ layout(set = 1, binding = 6, std430) readonly buffer VoxelList {
 #ifdef PAPER
 layout(set = 1, binding = 5, rgba8) uniform image3D radiance;
 #else
-layout(set = 1, binding = 5, rgba16f) uniform image3D radiance;
-// Where the voxel's light goes (inject_radiance.comp): a two-sided voxel's bounce light goes
-// to the sides it fell on, as its direct light does.
-layout(set = 1, binding = 9, rgba8_snorm) uniform image3D emit_dir;
+// Per listed voxel: the light it reflects (times the radiance scale) as half floats, r g and b
+// then, for a two-sided voxel, which way it goes along voxel_facing (-1 to 1; 2: one-sided).
+layout(set = 1, binding = 11, std430) writeonly buffer Reflected { uvec2 reflected[]; };
+// Over the listed voxels: albedo x closed share (r, g, b) and their count, each as 64-bit fixed
+// point (low word, high word; REFLECTANCE_ONE a voxel).
+layout(set = 1, binding = 12, std430) buffer Reflectance { uint reflectance[8]; };
+const float REFLECTANCE_ONE = 65536.0;
+shared vec4 partial[64];
 #endif
 
-vec3 gather(vec3 p, vec3 n) {
+// The light falling on a surface at p facing n (rgb), and the share of its hemisphere, cosine
+// weighted, where the cones met surfaces (a).
+vec4 gather(vec3 p, vec3 n) {
     mat3 frame_n = tangent_frame(n);
     float vs = voxel_size();
     float max_dist = frame.cone.z * frame.grid.w;
     vec3 e = vec3(0.0);
+    float closed = 0.0;
 #ifdef PAPER
     const vec3 dirs[4] = vec3[4](vec3(0.0, 0.0, 1.0), vec3(0.0, 0.866025, 0.5),
                                  vec3(0.754996, -0.4330128, 0.5), vec3(-0.754996, -0.4330128, 0.5));
@@ -50,14 +60,16 @@ vec3 gather(vec3 p, vec3 n) {
     vec3 origin = p + n * (frame.trace.x + 1.0) * vs;
     for (uint i = 0u; i < frame.grid_info.z; i++) {
         vec3 d = normalize(frame_n * frame.cones[i].xyz);
-        e += frame.cones[i].w * trace_cone(origin, d, frame.cone.x, vs, max_dist).radiance;
+        Cone cone = trace_cone(origin, d, frame.cone.x, vs, max_dist);
+        e += frame.cones[i].w * cone.radiance;
+        closed += frame.cones[i].w * cone.opacity;
     }
 #endif
-    return e;
+    return vec4(e, closed / PI);  // the cone weights sum to pi
 }
 
+#ifdef PAPER
 void main() {
-    // Rows of groups (voxel_list.comp): the list's index runs along x, then y.
     uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
     if (i >= min(count, uint(coords.length()))) return;
     uint packed = coords[i];
@@ -65,33 +77,64 @@ void main() {
     Voxel v = load_voxel(c);
     if (!v.filled) return;
     vec4 direct = imageLoad(radiance, c);
-#ifdef PAPER
     vec3 p = frame.grid.xyz + vec3(c) * voxel_size();
     vec3 n = dot(v.normal, v.normal) > 0.0 ? v.normal : vec3(0.0, 1.0, 0.0);
-    vec3 bounce = clamp(gather(p, n), 0.0, 1.0) * v.albedo;
-#else
-    vec3 p = voxel_centre(c);
-    vec3 n = dot(v.normal, v.normal) > 0.0 ? v.normal
-           : (v.axis_weights.x >= max(v.axis_weights.y, v.axis_weights.z) ? vec3(1.0, 0.0, 0.0)
-           : (v.axis_weights.y >= v.axis_weights.z ? vec3(0.0, 1.0, 0.0) : vec3(0.0, 0.0, 1.0)));
-    vec3 bounce;
-    if (v.agreement < 0.5) {
-        // Two-sided: each face reflects what falls on its side; the voxel holds their mean,
-        // and its light goes where the brighter side faces (as inject_radiance.comp's direct
-        // light does), not every way: a thin wall lit on one side stays dark on the other.
-        vec3 front = v.albedo / PI * gather(p, n);
-        vec3 back = v.albedo / PI * gather(p, -n);
-        bounce = 0.5 * (front + back);
-        float lf = luminance(front), lb = luminance(back);
-        vec3 bounce_dir = n * (lf - lb) / max(lf + lb, 1e-30);
-        vec3 dir = imageLoad(emit_dir, c).xyz;
-        float ld = luminance(direct.rgb / frame.tuning.y), lbounce = luminance(bounce);
-        vec3 going = (dir * ld + bounce_dir * lbounce) / max(ld + lbounce, 1e-30);
-        float along = dot(going, going) > 0.0 ? dot(v.offset, normalize(going)) : 0.0;
-        imageStore(emit_dir, c, vec4(going, along));
-    } else {
-        bounce = v.albedo / PI * gather(p, n);
-    }
-#endif
+    vec3 bounce = clamp(gather(p, n).rgb, 0.0, 1.0) * v.albedo;
     imageStore(radiance, c, vec4(direct.rgb + bounce * frame.tuning.y, direct.a));
 }
+#else
+// Adds a workgroup's sum to the 64-bit word pair at k.
+void add_fixed(uint k, float x) {
+    uint add = uint(x * REFLECTANCE_ONE + 0.5);
+    uint before = atomicAdd(reflectance[k], add);
+    if (before > 0xFFFFFFFFu - add) atomicAdd(reflectance[k + 1u], 1u);
+}
+
+void main() {
+    // Rows of groups (voxel_list.comp): the list's index runs along x, then y.
+    uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
+    vec4 mine = vec4(0.0);  // albedo x closed share, and 1, for the sums
+    if (i < min(count, uint(coords.length()))) {
+        uint packed = coords[i];
+        ivec3 c = ivec3(packed & 1023u, (packed >> 10) & 1023u, packed >> 20);
+        Voxel v = load_voxel(c);
+        vec3 bounce = vec3(0.0);
+        float side = 2.0;
+        if (v.filled) {
+            vec3 p = voxel_centre(c);
+            vec3 n = voxel_facing(v);
+            float closed;
+            if (v.agreement < 0.5) {
+                // Two-sided: each face reflects what falls on its side; the voxel holds their
+                // mean, and its light goes where the brighter side faces (as
+                // inject_radiance.comp's direct light does), not every way: a thin wall lit on
+                // one side stays dark on the other.
+                vec4 gf = gather(p, n), gb = gather(p, -n);
+                vec3 front = v.albedo / PI * gf.rgb, back = v.albedo / PI * gb.rgb;
+                bounce = 0.5 * (front + back);
+                float lf = luminance(front), lb = luminance(back);
+                side = (lf - lb) / max(lf + lb, 1e-30);
+                closed = 0.5 * (gf.a + gb.a);
+            } else {
+                vec4 g = gather(p, n);
+                bounce = v.albedo / PI * g.rgb;
+                closed = g.a;
+            }
+            mine = vec4(v.albedo * clamp(closed, 0.0, 1.0), 1.0);
+        }
+        bounce *= frame.tuning.y;
+        reflected[i] = uvec2(packHalf2x16(bounce.rg), packHalf2x16(vec2(bounce.b, side)));
+    }
+    // The workgroup's sum, then one atomic add per word.
+    uint l = gl_LocalInvocationIndex;
+    partial[l] = mine;
+    barrier();
+    for (uint s = 32u; s > 0u; s >>= 1u) {
+        if (l < s) partial[l] += partial[l + s];
+        barrier();
+    }
+    if (l == 0u && partial[0].w > 0.0) {
+        for (uint k = 0u; k < 4u; k++) add_fixed(2u * k, partial[0][k]);
+    }
+}
+#endif

@@ -108,4 +108,12 @@ Voxel load_voxel(ivec3 c) {
 }
 #endif
 
+// The side a voxel's surfaces face: its normal, or where their normals cancel (a thin two-sided
+// panel), the axis they face most.
+vec3 voxel_facing(Voxel v) {
+    if (dot(v.normal, v.normal) > 0.0) return v.normal;
+    return v.axis_weights.x >= max(v.axis_weights.y, v.axis_weights.z) ? vec3(1.0, 0.0, 0.0)
+         : (v.axis_weights.y >= v.axis_weights.z ? vec3(0.0, 1.0, 0.0) : vec3(0.0, 0.0, 1.0));
+}
+
 #endif

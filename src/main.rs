@@ -15,7 +15,7 @@ voxgi: real-time global illumination by deferred voxel shading, on Vulkan
 USAGE:
   voxgi render [SCENE] [--out FILE] [--width W] [--height H] [--mode MODE] [--mip L]
                [--voxels N] [--bounces N] [--paper] [--cones N] [--aperture DEG]
-               [--step F] [--voxel-shadows] [--cone-shadows]
+               [--step F] [--voxel-shadows] [--cone-shadows] [--no-tail]
                [--frames N] [--exposure EV] [--shadow-res N] [--sun EL,AZ[,E]]
                [--spin NODE [--spin-speed DEG]] [--time T]
                [--validate] [--timings] [--device NAME]
@@ -28,7 +28,8 @@ USAGE:
   voxgi reference [SCENE] [--spp N] [--out FILE.exr] [--width W] [--height H] [--seed S]
                   [--sun EL,AZ[,E]] [--bounces N]
   voxgi compare A.exr REFERENCE.exr [--exposure EV]
-  voxgi hard-cases [NAME..] [--size N] [--voxels N] [--ref-spp N] [--bounces N] [--ideal]
+  voxgi hard-cases [NAME..] [--size N] [--voxels N] [--ref-spp N] [--bounces N] [--no-tail]
+                   [--ideal]
                    [--out FILE.md]
   voxgi bench SCENE [--sweep SPEC] [--out DIR] [--width W --height H] [--frames N]
               [--warmup N] [--ref-spp N] [--sun EL,AZ[,E]] [--exposure EV] [--validate]
@@ -48,6 +49,9 @@ USAGE:
                step as a fraction of the cone diameter (0.5)
   --voxel-shadows         voxel visibility by tracing the voxels (else the shadow maps)
   --cone-shadows          soft shadows: direct light shadowed by cones through the voxels
+  --no-tail    the last bounce does not add the bounces after it (by default it adds them as
+               a geometric series: the voxels' mean albedo times their closed share, at most
+               0.6, is each further bounce's share of the one before)
   --frames N   frames to render (timings are medians over them; default 1, 5 with --timings)
   --exposure EV           display exposure for .png, in stops (default 0)
   --shadow-res N          shadow-map texels per side (default 2048)
@@ -77,12 +81,13 @@ USAGE:
   hard-cases   runs the hard cases (light leaks, density, precision, degenerate input,
                extreme lights, cones at the edges; all of them or those named), each with
                --paper and the defaults at --voxels (default 64), --size (default 64)
-               pixels and --bounces (default 2), under validation; prints (and writes to
-               --out) the markdown table of docs/hard-cases.md; fails when a default setting
-               misses its goal; --ideal adds two columns, for the cases measured against
-               the reference: the default image's relMSE against the reference path
-               tracer limited to the default column's bounces (reference --bounces), and
-               that path tracer's own score in place of the real-time image
+               pixels and --bounces (default 2; --no-tail: without the bounces not traced),
+               under validation; prints (and writes to --out) the markdown table of
+               docs/hard-cases.md; fails when a default setting misses its goal; --ideal
+               adds two columns, for the cases measured against the reference: the default
+               image without the tail, its relMSE against the reference path tracer limited
+               to the default column's bounces (reference --bounces), and that path
+               tracer's own score in place of the real-time image
   compare      prints one JSON line: relMSE, MAE, RMSE (radiance) and FLIP (display images)
   bench        times each setting of a sweep (per-pass GPU medians and frame wall time over
                --frames, default 10, after --warmup, default 2) and measures its error
@@ -95,7 +100,7 @@ USAGE:
                also with the paper's settings, cones 1..16, aperture 30..90, step 0.25..1,
                bounces 1,2), tiny (32^3: default and paper). Axes: voxels, bounces, paper,
                cones, aperture, step, max-distance, start-offset, ao-falloff, voxel-shadows,
-               cone-shadows, lod-offset. Example: --sweep 'voxels=32,64;cones=4,6;paper=0,1'
+               cone-shadows, lod-offset, tail. Example: --sweep 'voxels=32,64;cones=4,6;paper=0,1'
 ";
 
 /// The Cornell box generated into assets/ (see voxgi::scene::builder).
@@ -115,6 +120,7 @@ const FLAGS: &[&str] = &[
     "--paper",
     "--voxel-shadows",
     "--cone-shadows",
+    "--no-tail",
     "--no-vsync",
     "--ideal",
 ];
@@ -329,6 +335,9 @@ fn gi_settings(args: &Args) -> Result<GiSettings> {
     }
     gi.voxel_shadows = args.flag("--voxel-shadows");
     gi.cone_shadows = args.flag("--cone-shadows");
+    if args.flag("--no-tail") {
+        gi.tail = false;
+    }
     Ok(gi)
 }
 
@@ -753,10 +762,12 @@ fn hard_cases(args: &Args) -> Result<()> {
     }
     let default_bounces = voxgi::gi::GiSettings::default().bounces;
     let bounces = args.bounces()?.unwrap_or(default_bounces);
-    let default_label = if bounces == default_bounces {
-        "default".to_string()
-    } else {
-        format!("default, {bounces} bounces")
+    let tail = !args.flag("--no-tail");
+    let default_label = match (bounces == default_bounces, tail) {
+        (true, true) => "default".to_string(),
+        (false, true) => format!("default, {bounces} bounces"),
+        (true, false) => "default, no tail".to_string(),
+        (false, false) => format!("default, {bounces} bounces, no tail"),
     };
     let ctx = Context::new(&ContextDesc {
         validate: true,
@@ -770,6 +781,7 @@ fn hard_cases(args: &Args) -> Result<()> {
         args.number("--ref-spp", 256)?,
     )?;
     env.bounces = bounces;
+    env.tail = tail;
     env.ideal = args.flag("--ideal");
     let mut rows = Vec::new();
     for case in CASES

@@ -357,6 +357,7 @@ fn each_bounce_adds_less_light_than_the_one_before() {
         .map(|bounces| {
             let mut set = settings(Mode::Full, 32, 24);
             set.gi.bounces = bounces;
+            set.gi.tail = false;
             let img = render(&s, set);
             assert!(!img.has_non_finite());
             img.pixels.iter().map(|p| p[1]).sum::<f32>() / img.pixels.len() as f32
@@ -384,6 +385,58 @@ fn each_bounce_adds_less_light_than_the_one_before() {
             "each bounce must add a fraction of the light the one before added: {means:?}"
         );
     }
+}
+
+/// The furnace's image mean (green) at 32^3 and 24x24, with `bounces` and the tail or not.
+fn furnace_mean(albedo: f32, le: f32, bounces: u32, tail: bool) -> f32 {
+    let (b, camera) = voxgi::hard::scenes::furnace(albedo, le);
+    let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
+        "voxgi-tail-{}-{albedo}-{bounces}-{tail}.glb",
+        std::process::id()
+    ));
+    std::fs::write(&path, b.to_glb()).unwrap();
+    let mut s = voxgi::scene::load(&path).unwrap();
+    std::fs::remove_file(&path).unwrap();
+    s.camera = camera;
+    let mut set = settings(Mode::Full, 32, 24);
+    set.gi.bounces = bounces;
+    set.gi.tail = tail;
+    let img = render(&s, set);
+    assert!(
+        !img.has_non_finite(),
+        "albedo {albedo}, Le {le}: not finite"
+    );
+    img.pixels.iter().map(|p| p[1]).sum::<f32>() / img.pixels.len() as f32
+}
+
+#[test]
+fn the_tail_adds_the_bounces_not_traced_as_a_geometric_series() {
+    // The last bounce's light, K B1 (the 2-bounce image less the 1-bounce one), is scaled by
+    // 1 / (1 - lambda), so the tail adds lambda / (1 - lambda) of it. In the furnace of albedo
+    // 0.5 lambda is 0.5 times the share of each voxel's hemisphere the cones find closed
+    // (nearly all of it): a ratio a little under 1. In one of albedo 0.95 lambda is cut at 0.6,
+    // 1.5 exactly, and at an emission of 5e4 (volumes scaled down to 1e4) nothing overflows.
+    for (albedo, le, low, high) in [(0.5, 1.0, 0.8, 1.0), (0.95, 5e4, 1.49, 1.51)] {
+        let one = furnace_mean(albedo, le, 1, false);
+        let two = furnace_mean(albedo, le, 2, false);
+        let tail = furnace_mean(albedo, le, 2, true);
+        let ratio = (tail - two) / (two - one);
+        eprintln!("albedo {albedo}: means {one} / {two} / {tail} with the tail: ratio {ratio}");
+        assert!(
+            ratio >= low && ratio <= high,
+            "albedo {albedo}: the tail adds {ratio} times the last bounce, not {low} to {high}"
+        );
+    }
+    // With albedo 0.5 the exact mean is 2: the tail's one pass comes nearer it than two more
+    // bounce passes.
+    let (four, tail) = (
+        furnace_mean(0.5, 1.0, 4, false),
+        furnace_mean(0.5, 1.0, 2, true),
+    );
+    assert!(
+        (tail - 2.0).abs() < (four - 2.0).abs(),
+        "2 bounces and the tail {tail}, 4 bounces {four}; exactly 2"
+    );
 }
 
 #[test]

@@ -9,10 +9,12 @@ use std::sync::Mutex;
 use voxgi::hard::{Env, CASES};
 
 /// Image side, grid side and reference samples per pixel of the tests (the report uses 64, 64,
-/// 256: `voxgi hard-cases`).
+/// 256: `voxgi hard-cases`). With 64 samples the reference's noise alone came to about 0.02 of
+/// the rooms' relMSE and favoured darker images (where the noisy reference is dark the error
+/// weighs most).
 const SIZE: u32 = 48;
 const VOXELS: u32 = 64;
-const REF_SPP: u32 = 64;
+const REF_SPP: u32 = 256;
 
 /// The cases whose goal the defaults meet (the others are open work, listed in
 /// docs/hard-cases.md with their measured values).
@@ -32,6 +34,11 @@ const MEETS_GOAL: &[&str] = &[
     "leak-floor-1cm",
     "leak-wall-bounce",
     "two-sided-panel",
+    "camera-in-volume",
+    "camera-in-voxel",
+    "grid-48",
+    "grid-100",
+    "grid-8",
     "spot-hard-edge",
     "sun-along-axis",
     "sun-grazing",
@@ -44,10 +51,9 @@ const MEETS_GOAL: &[&str] = &[
 ];
 
 /// Open cases that come within 1.5 times their goal: they must stay there. At 48x48 against
-/// 64 spp references: camera-in-volume 0.064 and grid-48 0.064 (goal 0.05; they meet it in
-/// the report's 64x64 against 256 spp, 0.042 and 0.048, the references' noise making the
-/// rest), grid-8 0.111 (goal 0.1).
-const NEAR_GOAL: &[&str] = &["camera-in-volume", "grid-48", "grid-8"];
+/// 256 spp references: the furnace 0.056 (goal 0.05). (emissive-1e4, 0.071 against 0.075,
+/// is held only to beat --paper.)
+const NEAR_GOAL: &[&str] = &["furnace"];
 
 /// One validated context for all cases: lavapipe's instance creation is slow and the cases run
 /// one at a time anyway (each renders at 48x48 and path-traces a reference on both cores).
@@ -119,7 +125,8 @@ fn check(name: &str) {
 #[test]
 fn the_ideal_column_is_the_path_tracer_with_the_same_bounces() {
     // The furnace (albedo 0.5, Le = 1): with B bounces a perfect tracer gets
-    // 1 + 0.5 + ... + 0.5^B of the exact 2, a relative error of 0.5^(B + 1).
+    // 1 + 0.5 + ... + 0.5^B of the exact 2, a relative error of 0.5^(B + 1). The defaults
+    // without the tail trace those B bounces and no more.
     let case = CASES.iter().find(|c| c.name == "furnace").unwrap();
     let mut guard = ENV.lock().unwrap_or_else(|e| e.into_inner());
     let env = guard
@@ -128,6 +135,7 @@ fn the_ideal_column_is_the_path_tracer_with_the_same_bounces() {
     for b in [1u32, 2] {
         let gi = voxgi::gi::GiSettings {
             bounces: b,
+            tail: false,
             ..env.settings(false)
         };
         // Set for this run only: the other cases share the environment.
@@ -168,6 +176,22 @@ fn the_ideal_column_is_the_path_tracer_with_the_same_bounces() {
             default,
         });
     }
+    // With the tail the 2 bounces beat the path tracer limited to 2 (it adds the bounces
+    // after them), and the cones' column is still that of the image without it.
+    env.ideal = true;
+    let tail = env.run(case, &env.settings(false));
+    env.ideal = false;
+    let (ideal, cones) = (tail.ideal.unwrap(), tail.cones.unwrap());
+    assert!(
+        tail.value < ideal,
+        "with the tail {} against the 2-bounce path tracer's {ideal}",
+        tail.value
+    );
+    let without = rows[1].default.cones.unwrap();
+    assert!(
+        (cones - without).abs() <= 1e-6 * without,
+        "the cones' column with the tail {cones}, without {without}"
+    );
     let table = voxgi::hard::table(&rows, "default", true);
     assert!(
         table

@@ -100,6 +100,7 @@ fn gi_fields(r: &Row) -> Vec<(&'static str, String)> {
         ("voxel_shadows", g.voxel_shadows.to_string()),
         ("cone_shadows", g.cone_shadows.to_string()),
         ("lod_offset", g.lod_offset.to_string()),
+        ("tail", g.tail.to_string()),
     ]
 }
 

@@ -101,6 +101,7 @@ pub fn label(gi: &GiSettings) -> String {
         gi.lod_offset != b.lod_offset,
         gi.lod_offset.to_string(),
     );
+    add("tail", gi.tail != b.tail, flag(gi.tail));
     s
 }
 
@@ -205,6 +206,7 @@ const AXES: &[(&str, f64, f64, bool, Apply)] = &[
     ("lod-offset", 0.0, 4.0, false, |g, v| {
         g.lod_offset = v as f32
     }),
+    ("tail", 0.0, 1.0, true, |g, v| g.tail = v != 0.0),
 ];
 
 fn parse_value(axis: &str, text: &str, min: f64, max: f64, integer: bool) -> Result<f64, String> {

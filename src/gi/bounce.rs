@@ -1,5 +1,6 @@
 //! The second bounce: each voxel gathers light from the directional volumes with diffuse cones
-//! and adds what it reflects to its radiance (then the mips run again).
+//! and adds what it reflects to its radiance (then the mips run again). The last bounce also
+//! adds the bounces not traced, as a geometric series (glsl/bounce_tail.comp).
 
 use super::inject::{read_voxel_data, voxel_data_descs};
 use super::volumes::Volumes;
@@ -16,7 +17,24 @@ pub struct Bounce {
     cone_set: Set,
     /// The filled voxels (voxel_list.comp), after the bounce's dispatch arguments and count.
     list: Buffer,
+    /// Except for --paper, which adds a voxel's bounce light as it gathers it.
+    tail: Option<Tail>,
 }
+
+/// What the gather leaves for bounce_tail.comp, which adds it to the voxels.
+struct Tail {
+    pipeline: Pipeline,
+    /// Per listed voxel, the light it reflects (four half floats).
+    reflected: Buffer,
+    /// Sums over the listed voxels of albedo times closed share, and their count (64-bit fixed
+    /// point each).
+    reflectance: Buffer,
+    /// Whether the last bounce adds the bounces after it (GiSettings::tail).
+    enabled: bool,
+}
+
+/// Bytes of the reflectance sums: r, g, b and count, two words each.
+const REFLECTANCE_BYTES: u64 = 32;
 
 /// Room in the voxel list: every voxel of a small grid; surfaces (about N^2 per side of the
 /// grid they cross) beyond that, so that 512^3 stays within a 128 MiB storage buffer.
@@ -56,21 +74,46 @@ impl Bounce {
         volumes: &Volumes,
         scene_layout: &SetLayout,
         paper: bool,
+        tail: bool,
     ) -> VkResult<Bounce> {
+        let capacity = list_capacity(volumes.grid.resolution);
         let list = Buffer::new(
             ctx,
             "voxel list",
-            16 + 4 * list_capacity(volumes.grid.resolution),
+            16 + 4 * capacity,
             vk::BufferUsageFlags::STORAGE_BUFFER
                 | vk::BufferUsageFlags::INDIRECT_BUFFER
                 | vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuOnly,
         )?;
+        let buffers = if paper {
+            None
+        } else {
+            let reflected = Buffer::new(
+                ctx,
+                "bounce reflected",
+                8 * capacity,
+                vk::BufferUsageFlags::STORAGE_BUFFER,
+                MemoryLocation::GpuOnly,
+            )?;
+            let reflectance = Buffer::new(
+                ctx,
+                "bounce reflectance",
+                REFLECTANCE_BYTES,
+                vk::BufferUsageFlags::STORAGE_BUFFER | vk::BufferUsageFlags::TRANSFER_DST,
+                MemoryLocation::GpuOnly,
+            )?;
+            Some((reflected, reflectance))
+        };
         let mut descs = voxel_data_descs(volumes);
         descs.push((5, Desc::StorageImage(volumes.radiance.view)));
         descs.push((6, Desc::Storage(&list)));
         if let Some(dir) = &volumes.emit_dir {
             descs.push((9, Desc::StorageImage(dir.view)));
+        }
+        if let Some((reflected, reflectance)) = &buffers {
+            descs.push((11, Desc::Storage(reflected)));
+            descs.push((12, Desc::Storage(reflectance)));
         }
         let set = pool.set(vk::ShaderStageFlags::COMPUTE, &descs)?;
         let cone_set = cone_set(pool, volumes, false)?;
@@ -96,15 +139,33 @@ impl Bounce {
             0,
             &Spec(vec![]),
         )?;
+        let tail = match buffers {
+            Some((reflected, reflectance)) => Some(Tail {
+                pipeline: pipelines::compute(
+                    ctx,
+                    "bounce_tail.comp",
+                    &[scene_layout, &set.layout],
+                    4,
+                    &Spec(vec![]),
+                )?,
+                reflected,
+                reflectance,
+                enabled: tail,
+            }),
+            None => None,
+        };
         Ok(Bounce {
             list_pipeline,
             pipeline,
             set,
             cone_set,
             list,
+            tail,
         })
     }
 
+    /// Records bounce `name`; `last`: the last bounce, which adds the bounces not traced.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         ctx: &Context,
@@ -112,6 +173,7 @@ impl Bounce {
         volumes: &Volumes,
         scene_set: vk::DescriptorSet,
         voxels_changed: bool,
+        last: bool,
         name: &str,
     ) {
         let d = &ctx.device;
@@ -119,18 +181,60 @@ impl Bounce {
         if voxels_changed {
             self.record_list(d, g, volumes, scene_set);
         }
+        let Some(tail) = &self.tail else {
+            // --paper: the gather adds to the radiance itself.
+            let mut pass = read_voxel_data(g.pass(name), volumes)
+                .image(&volumes.radiance, Access::ComputeStorageReadWrite)
+                .buffer(&self.list, Access::ComputeIndirectRead);
+            for f in volumes.directional() {
+                pass = pass.image(f, Access::ComputeSampled);
+            }
+            pass.record(|cmd| unsafe {
+                self.pipeline
+                    .bind_compute(d, cmd, &[scene_set, self.set.raw, self.cone_set.raw]);
+                d.cmd_dispatch_indirect(cmd, self.list.raw, 0);
+            });
+            return;
+        };
+        let clear = format!("{name} sums clear");
+        g.pass(&clear)
+            .buffer(&tail.reflectance, Access::TransferWrite)
+            .untimed()
+            .record(|cmd| unsafe {
+                d.cmd_fill_buffer(cmd, tail.reflectance.raw, 0, REFLECTANCE_BYTES, 0);
+            });
         let mut pass = read_voxel_data(g.pass(name), volumes)
-            .image(&volumes.radiance, Access::ComputeStorageReadWrite)
-            .buffer(&self.list, Access::ComputeIndirectRead);
-        if let Some(dir) = &volumes.emit_dir {
-            pass = pass.image(dir, Access::ComputeStorageReadWrite);
-        }
+            .buffer(&self.list, Access::ComputeIndirectRead)
+            .buffer(&tail.reflected, Access::ComputeStorageWrite)
+            .buffer(&tail.reflectance, Access::ComputeStorageReadWrite);
         for f in volumes.directional() {
             pass = pass.image(f, Access::ComputeSampled);
         }
         pass.record(|cmd| unsafe {
             self.pipeline
                 .bind_compute(d, cmd, &[scene_set, self.set.raw, self.cone_set.raw]);
+            d.cmd_dispatch_indirect(cmd, self.list.raw, 0);
+        });
+        let add = format!("{name} add");
+        let mut pass = read_voxel_data(g.pass(&add), volumes)
+            .image(&volumes.radiance, Access::ComputeStorageReadWrite)
+            .buffer(&self.list, Access::ComputeIndirectRead)
+            .buffer(&tail.reflected, Access::ComputeStorageRead)
+            .buffer(&tail.reflectance, Access::ComputeStorageRead);
+        if let Some(dir) = &volumes.emit_dir {
+            pass = pass.image(dir, Access::ComputeStorageReadWrite);
+        }
+        let push = u32::from(last && tail.enabled);
+        pass.record(|cmd| unsafe {
+            tail.pipeline
+                .bind_compute(d, cmd, &[scene_set, self.set.raw]);
+            d.cmd_push_constants(
+                cmd,
+                tail.pipeline.layout,
+                tail.pipeline.push_stages,
+                0,
+                as_bytes(&[push]),
+            );
             d.cmd_dispatch_indirect(cmd, self.list.raw, 0);
         });
     }

@@ -379,7 +379,7 @@ pub static CASES: &[Case] = &[
             let (b, cam) = furnace(0.5, 1.0);
             let s = env.load("furnace", &b)?;
             let img = env.render(&s, &cam, gi)?;
-            env.measure_ideal(&s, &cam, gi, &img, |ideal| (mean(ideal) / 2.0 - 1.0).abs());
+            env.measure_ideal(&s, &cam, gi, &img, |ideal| (mean(ideal) / 2.0 - 1.0).abs())?;
             Ok((mean(&img) / 2.0 - 1.0).abs())
         },
     },

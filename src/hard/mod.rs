@@ -65,6 +65,9 @@ pub struct Env {
     pub ref_spp: u32,
     /// Light bounces of the default column (the defaults' own unless `--bounces` says).
     pub bounces: u32,
+    /// Whether the default column adds the bounces not traced (`GiSettings::tail`; off with
+    /// `--no-tail`).
+    pub tail: bool,
     /// Also measure, for the cases measured against the reference, the reference limited to
     /// the settings' bounces in place of the real-time image (`voxgi hard-cases --ideal`).
     pub ideal: bool,
@@ -91,8 +94,9 @@ pub struct Outcome {
     pub error: Option<String>,
     /// With [`Env::ideal`]: what the reference path tracer limited to the same bounces scores.
     pub ideal: Option<f64>,
-    /// With [`Env::ideal`]: relMSE of the real-time image against that path tracer's, the
-    /// error the bounces it models leave (the cones' own, not the missing bounces').
+    /// With [`Env::ideal`]: relMSE of the real-time image without the tail (the bounces after
+    /// the last, `GiSettings::tail`) against that path tracer's, the error the bounces it
+    /// traces leave (the cones' own, not the missing bounces').
     pub cones: Option<f64>,
 }
 
@@ -116,6 +120,7 @@ impl Env {
             voxels,
             ref_spp,
             bounces: GiSettings::default().bounces,
+            tail: GiSettings::default().tail,
             ideal: false,
             ideal_value: None,
             cones_value: None,
@@ -134,6 +139,7 @@ impl Env {
             GiSettings {
                 voxels: self.voxels,
                 bounces: self.bounces,
+                tail: self.tail,
                 ..GiSettings::default()
             }
         }
@@ -332,13 +338,14 @@ impl Env {
         let reference = self.reference(scene, camera, None);
         self.measure_ideal(scene, camera, gi, &img, |ideal| {
             crate::metrics::compare(ideal, &reference).rel_mse
-        });
+        })?;
         Ok(crate::metrics::compare(&img, &reference).rel_mse)
     }
 
     /// With [`Env::ideal`] (and not `--paper`): `measure` of the reference limited to `gi`'s
     /// bounces, kept as the case's [`Outcome::ideal`], and the relMSE of `img`, the real-time
-    /// image, against it ([`Outcome::cones`]).
+    /// image, against it ([`Outcome::cones`]); with the tail, of the image rendered again
+    /// without it, which traces only those bounces.
     pub fn measure_ideal(
         &mut self,
         scene: &Scene,
@@ -346,12 +353,24 @@ impl Env {
         gi: &GiSettings,
         img: &RadianceImage,
         measure: impl FnOnce(&RadianceImage) -> f64,
-    ) {
+    ) -> Result<()> {
         if self.ideal && !gi.paper {
             let ideal = self.reference(scene, camera, Some(gi.bounces));
             self.ideal_value = Some(measure(&ideal));
-            self.cones_value = Some(crate::metrics::compare(img, &ideal).rel_mse);
+            let traced = match gi.tail && gi.bounces >= 2 {
+                true => &self.render(
+                    scene,
+                    camera,
+                    &GiSettings {
+                        tail: false,
+                        ..gi.clone()
+                    },
+                )?,
+                false => img,
+            };
+            self.cones_value = Some(crate::metrics::compare(traced, &ideal).rel_mse);
         }
+        Ok(())
     }
 }
 
@@ -430,7 +449,7 @@ fn cell(o: &Outcome, goal: Goal) -> String {
 pub fn table(rows: &[Row], default: &str, ideal: bool) -> String {
     let (extra, rule) = if ideal {
         (
-            " default against the path tracer, same bounces | path tracer, same bounces |",
+            " default without the tail against the path tracer, same bounces | path tracer, same bounces |",
             "---|---|",
         )
     } else {

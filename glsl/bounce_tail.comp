@@ -1,0 +1,67 @@
+#version 450
+// The bounces not traced, and the bounce's light into the voxels. inject_bounce.comp gathered
+// what each listed voxel reflects; this adds it to the voxel's radiance. On the last bounce it
+// also adds the bounces after it as a geometric series, the ambient term of progressive
+// radiosity (Cohen, Chen, Wallace and Greenberg 1988): each further bounce returns lambda of the
+// one before, lambda being the voxels' mean albedo times the share of their hemisphere that is
+// closed (what the cones found), per channel. So the last bounce's light is scaled by
+// 1 / (1 - lambda): in a closed box of albedo a every voxel sends out Le / (1 - a). Not for
+// --paper, whose second bounce is its last.
+#include "common.glsl"
+#include "voxel_common.glsl"
+#define VOXEL_SET 1
+#include "voxel_data.glsl"
+
+layout(local_size_x = 64) in;
+
+layout(push_constant) uniform Push {
+    uint last;  // 1: add the bounces not traced
+} push;
+
+layout(set = 1, binding = 5, rgba16f) uniform image3D radiance;
+layout(set = 1, binding = 6, std430) readonly buffer VoxelList {
+    uint dispatch_x, dispatch_y, dispatch_z;
+    uint count;
+    uint coords[];
+};
+// Where the voxel's light goes (inject_radiance.comp): a two-sided voxel's bounce light goes
+// to the sides it fell on, as its direct light does.
+layout(set = 1, binding = 9, rgba8_snorm) uniform image3D emit_dir;
+layout(set = 1, binding = 11, std430) readonly buffer Reflected { uvec2 reflected[]; };
+layout(set = 1, binding = 12, std430) readonly buffer Reflectance { uint reflectance[8]; };
+const float REFLECTANCE_ONE = 65536.0;
+
+// Lambda is kept at most 0.8 (five times the last bounce): the volumes hold at most about 1e4
+// (radiance_scale), so the voxels stay within half floats.
+const float MAX_LAMBDA = 0.6;
+
+float fixed_sum(uint k) {
+    return (float(reflectance[k + 1u]) * 4294967296.0 + float(reflectance[k])) / REFLECTANCE_ONE;
+}
+
+void main() {
+    uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
+    if (i >= min(count, uint(coords.length()))) return;
+    uint packed = coords[i];
+    ivec3 c = ivec3(packed & 1023u, (packed >> 10) & 1023u, packed >> 20);
+    Voxel v = load_voxel(c);
+    if (!v.filled) return;
+    vec3 bounce = vec3(unpackHalf2x16(reflected[i].x), unpackHalf2x16(reflected[i].y).x);
+    float side = unpackHalf2x16(reflected[i].y).y;
+    if (push.last != 0u) {
+        float voxels = fixed_sum(6u);
+        vec3 lambda = vec3(fixed_sum(0u), fixed_sum(2u), fixed_sum(4u)) / max(voxels, 1.0);
+        bounce /= 1.0 - min(lambda, vec3(MAX_LAMBDA));
+    }
+    vec4 direct = imageLoad(radiance, c);
+    if (side <= 1.0) {
+        // A two-sided voxel: its light goes the way of its direct and bounce light, by their
+        // luminance.
+        vec3 dir = imageLoad(emit_dir, c).xyz;
+        float ld = luminance(direct.rgb), lb = luminance(bounce);
+        vec3 going = (dir * ld + voxel_facing(v) * side * lb) / max(ld + lb, 1e-30);
+        float along = dot(going, going) > 0.0 ? dot(v.offset, normalize(going)) : 0.0;
+        imageStore(emit_dir, c, vec4(going, along));
+    }
+    imageStore(radiance, c, vec4(direct.rgb + bounce, direct.a));
+}
