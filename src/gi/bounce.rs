@@ -181,32 +181,24 @@ impl Bounce {
         if voxels_changed {
             self.record_list(d, g, volumes, scene_set);
         }
-        let Some(tail) = &self.tail else {
+        if let Some(tail) = &self.tail {
+            let clear = format!("{name} sums clear");
+            g.pass(&clear)
+                .buffer(&tail.reflectance, Access::TransferWrite)
+                .untimed()
+                .record(|cmd| unsafe {
+                    d.cmd_fill_buffer(cmd, tail.reflectance.raw, 0, REFLECTANCE_BYTES, 0);
+                });
+        }
+        let mut pass =
+            read_voxel_data(g.pass(name), volumes).buffer(&self.list, Access::ComputeIndirectRead);
+        pass = match &self.tail {
+            Some(tail) => pass
+                .buffer(&tail.reflected, Access::ComputeStorageWrite)
+                .buffer(&tail.reflectance, Access::ComputeStorageReadWrite),
             // --paper: the gather adds to the radiance itself.
-            let mut pass = read_voxel_data(g.pass(name), volumes)
-                .image(&volumes.radiance, Access::ComputeStorageReadWrite)
-                .buffer(&self.list, Access::ComputeIndirectRead);
-            for f in volumes.directional() {
-                pass = pass.image(f, Access::ComputeSampled);
-            }
-            pass.record(|cmd| unsafe {
-                self.pipeline
-                    .bind_compute(d, cmd, &[scene_set, self.set.raw, self.cone_set.raw]);
-                d.cmd_dispatch_indirect(cmd, self.list.raw, 0);
-            });
-            return;
+            None => pass.image(&volumes.radiance, Access::ComputeStorageReadWrite),
         };
-        let clear = format!("{name} sums clear");
-        g.pass(&clear)
-            .buffer(&tail.reflectance, Access::TransferWrite)
-            .untimed()
-            .record(|cmd| unsafe {
-                d.cmd_fill_buffer(cmd, tail.reflectance.raw, 0, REFLECTANCE_BYTES, 0);
-            });
-        let mut pass = read_voxel_data(g.pass(name), volumes)
-            .buffer(&self.list, Access::ComputeIndirectRead)
-            .buffer(&tail.reflected, Access::ComputeStorageWrite)
-            .buffer(&tail.reflectance, Access::ComputeStorageReadWrite);
         for f in volumes.directional() {
             pass = pass.image(f, Access::ComputeSampled);
         }
@@ -215,6 +207,9 @@ impl Bounce {
                 .bind_compute(d, cmd, &[scene_set, self.set.raw, self.cone_set.raw]);
             d.cmd_dispatch_indirect(cmd, self.list.raw, 0);
         });
+        let Some(tail) = &self.tail else {
+            return;
+        };
         let add = format!("{name} add");
         let mut pass = read_voxel_data(g.pass(&add), volumes)
             .image(&volumes.radiance, Access::ComputeStorageReadWrite)
