@@ -11,6 +11,7 @@
 #include "voxel_common.glsl"
 #define VOXEL_SET 1
 #include "voxel_data.glsl"
+#include "bounce_common.glsl"
 
 layout(local_size_x = 64) in;
 
@@ -19,17 +20,11 @@ layout(push_constant) uniform Push {
 } push;
 
 layout(set = 1, binding = 5, rgba16f) uniform image3D radiance;
-layout(set = 1, binding = 6, std430) readonly buffer VoxelList {
-    uint dispatch_x, dispatch_y, dispatch_z;
-    uint count;
-    uint coords[];
-};
 // Where the voxel's light goes (inject_radiance.comp): a two-sided voxel's bounce light goes
 // to the sides it fell on, as its direct light does.
 layout(set = 1, binding = 9, rgba8_snorm) uniform image3D emit_dir;
 layout(set = 1, binding = 11, std430) readonly buffer Reflected { uvec2 reflected[]; };
 layout(set = 1, binding = 12, std430) readonly buffer Reflectance { uint reflectance[8]; };
-const float REFLECTANCE_ONE = 65536.0;
 
 // Lambda is kept at most 0.6 (2.5 times the last bounce): the series multiplies what the last
 // bounce got wrong with the rest, and at 0.8 the light a closed white room leaked through a
@@ -42,10 +37,9 @@ float fixed_sum(uint k) {
 }
 
 void main() {
-    uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
-    if (i >= min(count, uint(coords.length()))) return;
-    uint packed = coords[i];
-    ivec3 c = ivec3(packed & 1023u, (packed >> 10) & 1023u, packed >> 20);
+    uint i = list_entry();
+    if (!listed(i)) return;
+    ivec3 c = listed_voxel(i);
     Voxel v = load_voxel(c);
     if (!v.filled) return;
     vec3 bounce = vec3(unpackHalf2x16(reflected[i].x), unpackHalf2x16(reflected[i].y).x);

@@ -14,15 +14,10 @@
 #define CONE_SET 2
 #define CONE_FULL_RES 0
 #include "cone_tracing.glsl"
+#include "bounce_common.glsl"
 
 // One invocation per filled voxel, from the list voxel_list.comp made.
 layout(local_size_x = 64) in;
-
-layout(set = 1, binding = 6, std430) readonly buffer VoxelList {
-    uint dispatch_x, dispatch_y, dispatch_z;
-    uint count;
-    uint coords[];
-};
 
 #ifdef PAPER
 layout(set = 1, binding = 5, rgba8) uniform image3D radiance;
@@ -33,7 +28,6 @@ layout(set = 1, binding = 11, std430) writeonly buffer Reflected { uvec2 reflect
 // Over the listed voxels: albedo x closed share (r, g, b) and their count, each as 64-bit fixed
 // point (low word, high word; REFLECTANCE_ONE a voxel).
 layout(set = 1, binding = 12, std430) buffer Reflectance { uint reflectance[8]; };
-const float REFLECTANCE_ONE = 65536.0;
 shared vec4 partial[64];
 #endif
 
@@ -70,10 +64,9 @@ vec4 gather(vec3 p, vec3 n) {
 
 #ifdef PAPER
 void main() {
-    uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
-    if (i >= min(count, uint(coords.length()))) return;
-    uint packed = coords[i];
-    ivec3 c = ivec3(packed & 1023u, (packed >> 10) & 1023u, packed >> 20);
+    uint i = list_entry();
+    if (!listed(i)) return;
+    ivec3 c = listed_voxel(i);
     Voxel v = load_voxel(c);
     if (!v.filled) return;
     vec4 direct = imageLoad(radiance, c);
@@ -91,12 +84,10 @@ void add_fixed(uint k, float x) {
 }
 
 void main() {
-    // Rows of groups (voxel_list.comp): the list's index runs along x, then y.
-    uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
+    uint i = list_entry();
     vec4 mine = vec4(0.0);  // albedo x closed share, and 1, for the sums
-    if (i < min(count, uint(coords.length()))) {
-        uint packed = coords[i];
-        ivec3 c = ivec3(packed & 1023u, (packed >> 10) & 1023u, packed >> 20);
+    if (listed(i)) {
+        ivec3 c = listed_voxel(i);
         Voxel v = load_voxel(c);
         vec3 bounce = vec3(0.0);
         float side = 2.0;

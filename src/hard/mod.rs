@@ -357,16 +357,16 @@ impl Env {
         if self.ideal && !gi.paper {
             let ideal = self.reference(scene, camera, Some(gi.bounces));
             self.ideal_value = Some(measure(&ideal));
-            let traced = match gi.tail && gi.bounces >= 2 {
-                true => &self.render(
-                    scene,
-                    camera,
-                    &GiSettings {
-                        tail: false,
-                        ..gi.clone()
-                    },
-                )?,
-                false => img,
+            let untailed;
+            let traced = if gi.tail && gi.bounces >= 2 {
+                let no_tail = GiSettings {
+                    tail: false,
+                    ..gi.clone()
+                };
+                untailed = self.render(scene, camera, &no_tail)?;
+                &untailed
+            } else {
+                img
             };
             self.cones_value = Some(crate::metrics::compare(traced, &ideal).rel_mse);
         }
