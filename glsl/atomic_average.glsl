@@ -16,27 +16,28 @@ uint pack_rgba8(vec4 v) {
          | ((uint(v.w) & 0xFFu) << 24u);
 }
 
-// GLSL cannot pass buffers to functions, so the average is stamped out per volume:
-// RGBA8_AVG(name, array) defines `void name(uint voxel, vec4 value)`. Each voxel is one 32-bit
-// word, the bits of an RGBA8 texel seen through an r32ui view; it lives in a storage buffer
-// because storage-image atomics from successive draws trip synchronization validation.
-#define RGBA8_AVG(NAME, GRID)                                                              \
-void NAME(uint voxel, vec4 value) {                                                        \
-    value.rgb *= 255.0;                                                                    \
-    uint new_value = pack_rgba8(vec4(value.rgb, 1.0));                                     \
-    uint prev = 0u;                                                                        \
-    uint cur;                                                                              \
-    int iterations = 0;                                                                    \
-    while ((cur = atomicCompSwap(GRID[voxel], prev, new_value)) != prev                     \
-           && iterations < 255) {                                                          \
-        prev = cur;                                                                        \
-        vec4 rval = unpack_rgba8(cur);                                                     \
-        rval.rgb = rval.rgb * rval.a;                                                      \
-        vec4 curf = rval + vec4(value.rgb, 1.0);                                           \
-        curf.rgb /= curf.a;                                                                \
-        new_value = pack_rgba8(curf);                                                      \
-        iterations++;                                                                      \
-    }                                                                                      \
+// Each voxel is one 32-bit word, the bits of an RGBA8 texel seen through an r32ui view, in a
+// buffer reached by address (voxel_common.glsl; the paper's are r32ui 3D images, whose atomics
+// from successive draws trip synchronization validation).
+layout(buffer_reference, std430, buffer_reference_align = 4) coherent buffer CoherentWords {
+    uint w[];
+};
+
+void imageAtomicRGBA8Avg(CoherentWords grid, uint voxel, vec4 value) {
+    value.rgb *= 255.0;
+    uint new_value = pack_rgba8(vec4(value.rgb, 1.0));
+    uint prev = 0u;
+    uint cur;
+    int iterations = 0;
+    while ((cur = atomicCompSwap(grid.w[voxel], prev, new_value)) != prev && iterations < 255) {
+        prev = cur;
+        vec4 rval = unpack_rgba8(cur);
+        rval.rgb = rval.rgb * rval.a;
+        vec4 curf = rval + vec4(value.rgb, 1.0);
+        curf.rgb /= curf.a;
+        new_value = pack_rgba8(curf);
+        iterations++;
+    }
 }
 
 #endif

@@ -3,14 +3,25 @@
 // the average neither wraps, drifts nor drops fragments as the paper's RGBA8 average does).
 #ifndef VOXEL_COMMON_GLSL
 #define VOXEL_COMMON_GLSL
+#extension GL_EXT_buffer_reference : require
+#extension GL_EXT_buffer_reference_uvec2 : require
 
-// Per voxel, in two buffers (so that a 512^3 grid binds within a 4 GiB maxStorageBufferRange):
-// count, albedo r g b; and normal x y z (two's complement), squared normal x y z, where the
-// surfaces cross the voxel along their projection's axis, from its centre (two's complement, in
-// voxels). The squared normals keep the axes a voxel's surfaces face even where opposite
-// normals cancel.
+// The voxel words lie in buffers reached by address: a 512^3 grid's sums (2 GiB a buffer) are
+// larger than a storage buffer's descriptor may span (maxStorageBufferRange: 128 MiB on
+// lavapipe). Each voxelization pass has a table of four addresses (volumes.rs), indexed by:
+const uint WORDS_ALBEDO = 0u;
+const uint WORDS_NORMAL = 1u;
+const uint WORDS_SPREAD = 2u;    // PAPER: the emission
+const uint WORDS_EMISSION = 3u;  // PAPER: the static flags
+layout(buffer_reference, std430, buffer_reference_align = 4) buffer Words { uint w[]; };
+
+// Per voxel, in three buffers (each within a 2 GiB allocation at 512^3): count, albedo r g b;
+// normal x y z (two's complement) and where the surfaces cross the voxel along their
+// projection's axis, from its centre (two's complement, in voxels); squared normal x y z. The
+// squared normals keep the axes a voxel's surfaces face even where opposite normals cancel.
 const uint ALBEDO_STRIDE = 4u;
-const uint NORMAL_STRIDE = 7u;
+const uint NORMAL_STRIDE = 4u;
+const uint SPREAD_STRIDE = 3u;
 // Per voxel: emission r g b (scaled by frame.cone.w).
 const uint EMISSION_STRIDE = 4u;  // RGB weighted by coverage, emitters' coverage (volumes.rs)
 // 12 fractional bits: a 32-bit sum holds 2^20 fragments of value 1; the quantisation of one

@@ -18,42 +18,38 @@ struct Voxel {
 };
 
 #ifdef PAPER
-layout(set = VOXEL_SET, binding = 0, std430) readonly buffer AlbedoGrid { uint albedo_grid[]; };
-layout(set = VOXEL_SET, binding = 1, std430) readonly buffer NormalGrid { uint normal_grid[]; };
-layout(set = VOXEL_SET, binding = 2, std430) readonly buffer EmissionGrid { uint emission_grid[]; };
+// The paper's words: albedo, normal, emission (WORDS_ALBEDO, WORDS_NORMAL, WORDS_SPREAD).
+layout(set = VOXEL_SET, binding = 0, std430) readonly buffer PaperWords { uvec2 paper_words[4]; };
 
 bool voxel_filled(ivec3 c) {
-    return (albedo_grid[voxel_index(c)] >> 24u) != 0u;
+    return (Words(paper_words[WORDS_ALBEDO]).w[voxel_index(c)] >> 24u) != 0u;
 }
 
 Voxel load_voxel(ivec3 c) {
     Voxel v;
     uint i = voxel_index(c);
-    vec4 a = unpack_rgba8(albedo_grid[i]);
+    vec4 a = unpack_rgba8(Words(paper_words[WORDS_ALBEDO]).w[i]);
     v.filled = a.a > 0.0;
     v.albedo = a.rgb / 255.0;
-    vec3 n = unpack_rgba8(normal_grid[i]).rgb / 255.0 * 2.0 - 1.0;
+    vec3 n = unpack_rgba8(Words(paper_words[WORDS_NORMAL]).w[i]).rgb / 255.0 * 2.0 - 1.0;
     v.agreement = length(n);
     v.normal = v.agreement > 0.0 ? n / v.agreement : vec3(0.0);
     v.axis_weights = v.normal * v.normal;
     v.emission = (frame.grid_info.w & FLAG_EMISSIVE) != 0u
-        ? unpack_rgba8(emission_grid[i]).rgb / 255.0 : vec3(0.0);
+        ? unpack_rgba8(Words(paper_words[WORDS_SPREAD]).w[i]).rgb / 255.0 : vec3(0.0);
     v.offset = vec3(0.0);
     return v;
 }
 #else
+// The static pass's words and the dynamic pass's (zero addresses without dynamic geometry).
 // Bindings 4 to 6 are the passes' own (shadow map, radiance, voxel list).
-layout(set = VOXEL_SET, binding = 0, std430) readonly buffer StaticAlbedo { uint static_albedo[]; };
-layout(set = VOXEL_SET, binding = 1, std430) readonly buffer StaticEmission { uint static_emission[]; };
-layout(set = VOXEL_SET, binding = 2, std430) readonly buffer DynamicAlbedo { uint dynamic_albedo[]; };
-layout(set = VOXEL_SET, binding = 3, std430) readonly buffer DynamicEmission { uint dynamic_emission[]; };
-layout(set = VOXEL_SET, binding = 7, std430) readonly buffer StaticNormal { uint static_normal[]; };
-layout(set = VOXEL_SET, binding = 8, std430) readonly buffer DynamicNormal { uint dynamic_normal[]; };
+layout(set = VOXEL_SET, binding = 0, std430) readonly buffer StaticWords { uvec2 static_words[4]; };
+layout(set = VOXEL_SET, binding = 2, std430) readonly buffer DynamicWords { uvec2 dynamic_words[4]; };
 
 bool voxel_filled(ivec3 c) {
     uint i = voxel_index(c) * ALBEDO_STRIDE;
-    uint count = static_albedo[i];
-    if ((frame.grid_info.w & FLAG_DYNAMIC) != 0u) count += dynamic_albedo[i];
+    uint count = Words(static_words[WORDS_ALBEDO]).w[i];
+    if ((frame.grid_info.w & FLAG_DYNAMIC) != 0u) count += Words(dynamic_words[WORDS_ALBEDO]).w[i];
     return count > 0u;
 }
 
@@ -61,18 +57,25 @@ Voxel load_voxel(ivec3 c) {
     Voxel v;
     uint i = voxel_index(c) * ALBEDO_STRIDE;
     uint k = voxel_index(c) * NORMAL_STRIDE;
-    uint count = static_albedo[i];
-    uvec3 a = uvec3(static_albedo[i + 1u], static_albedo[i + 2u], static_albedo[i + 3u]);
-    ivec3 n = ivec3(static_normal[k], static_normal[k + 1u], static_normal[k + 2u]);
-    uvec3 n2 = uvec3(static_normal[k + 3u], static_normal[k + 4u], static_normal[k + 5u]);
-    int off = int(static_normal[k + 6u]);
+    uint q = voxel_index(c) * SPREAD_STRIDE;
+    Words sa = Words(static_words[WORDS_ALBEDO]);
+    Words sn = Words(static_words[WORDS_NORMAL]);
+    Words ss = Words(static_words[WORDS_SPREAD]);
+    uint count = sa.w[i];
+    uvec3 a = uvec3(sa.w[i + 1u], sa.w[i + 2u], sa.w[i + 3u]);
+    ivec3 n = ivec3(sn.w[k], sn.w[k + 1u], sn.w[k + 2u]);
+    int off = int(sn.w[k + 3u]);
+    uvec3 n2 = uvec3(ss.w[q], ss.w[q + 1u], ss.w[q + 2u]);
     bool dynamic = (frame.grid_info.w & FLAG_DYNAMIC) != 0u;
     if (dynamic) {
-        count += dynamic_albedo[i];
-        a += uvec3(dynamic_albedo[i + 1u], dynamic_albedo[i + 2u], dynamic_albedo[i + 3u]);
-        n += ivec3(dynamic_normal[k], dynamic_normal[k + 1u], dynamic_normal[k + 2u]);
-        n2 += uvec3(dynamic_normal[k + 3u], dynamic_normal[k + 4u], dynamic_normal[k + 5u]);
-        off += int(dynamic_normal[k + 6u]);
+        Words da = Words(dynamic_words[WORDS_ALBEDO]);
+        Words dn = Words(dynamic_words[WORDS_NORMAL]);
+        Words ds = Words(dynamic_words[WORDS_SPREAD]);
+        count += da.w[i];
+        a += uvec3(da.w[i + 1u], da.w[i + 2u], da.w[i + 3u]);
+        n += ivec3(dn.w[k], dn.w[k + 1u], dn.w[k + 2u]);
+        off += int(dn.w[k + 3u]);
+        n2 += uvec3(ds.w[q], ds.w[q + 1u], ds.w[q + 2u]);
     }
     v.filled = count > 0u;
     float inv = v.filled ? 1.0 / (float(count) * FIXED_ONE) : 0.0;
@@ -92,11 +95,13 @@ Voxel load_voxel(ivec3 c) {
     v.emitter_cover = 0.0;
     if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u && v.filled) {
         uint j = voxel_index(c) * EMISSION_STRIDE;
-        uvec3 e = uvec3(static_emission[j], static_emission[j + 1u], static_emission[j + 2u]);
-        uint cov = static_emission[j + 3u];
+        Words se = Words(static_words[WORDS_EMISSION]);
+        uvec3 e = uvec3(se.w[j], se.w[j + 1u], se.w[j + 2u]);
+        uint cov = se.w[j + 3u];
         if (dynamic) {
-            e += uvec3(dynamic_emission[j], dynamic_emission[j + 1u], dynamic_emission[j + 2u]);
-            cov += dynamic_emission[j + 3u];
+            Words de = Words(dynamic_words[WORDS_EMISSION]);
+            e += uvec3(de.w[j], de.w[j + 1u], de.w[j + 2u]);
+            cov += de.w[j + 3u];
         }
 
         // Sum of coverage-weighted emission over the emitters' coverage, or over 1 when they

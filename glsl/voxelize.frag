@@ -28,19 +28,10 @@ layout(location = 6) flat in vec4 g_tri01;
 layout(location = 7) flat in vec2 g_tri2;
 #endif
 
+// This pass's words: their addresses (voxel_common.glsl: WORDS_*).
+layout(set = 2, binding = 0, std430) readonly buffer Target { uvec2 target[4]; };
 #ifdef PAPER
 #include "atomic_average.glsl"
-layout(set = 2, binding = 0, std430) coherent buffer AlbedoGrid { uint albedo_grid[]; };
-layout(set = 2, binding = 1, std430) coherent buffer NormalGrid { uint normal_grid[]; };
-layout(set = 2, binding = 2, std430) coherent buffer EmissionGrid { uint emission_grid[]; };
-layout(set = 2, binding = 3, std430) buffer StaticFlag { uint static_flag[]; };
-RGBA8_AVG(average_albedo, albedo_grid)
-RGBA8_AVG(average_normal, normal_grid)
-RGBA8_AVG(average_emission, emission_grid)
-#else
-layout(set = 2, binding = 0, std430) buffer AlbedoAccum { uint albedo_accum[]; };
-layout(set = 2, binding = 1, std430) buffer EmissionAccum { uint emission_accum[]; };
-layout(set = 2, binding = 2, std430) buffer NormalAccum { uint normal_accum[]; };
 #endif
 
 #ifndef PAPER
@@ -103,16 +94,18 @@ void main() {
     if (!in_grid(c)) return;  // dilated triangles reach -1 and N: no-ops in GL, UB in Vulkan
     uint voxel = voxel_index(c);
     bool static_pass = (draw.flags & 2u) != 0u;
-    if (!static_pass && (frame.grid_info.w & FLAG_DYNAMIC) != 0u && static_flag[voxel] != 0u) {
+    if (!static_pass && (frame.grid_info.w & FLAG_DYNAMIC) != 0u
+        && Words(target[WORDS_EMISSION]).w[voxel] != 0u) {
         return;  // the paper hides dynamic geometry inside static voxels
     }
-    average_albedo(voxel, vec4(base.rgb, 1.0));
-    average_normal(voxel, vec4(normal * 0.5 + 0.5, 1.0));
+    imageAtomicRGBA8Avg(CoherentWords(target[WORDS_ALBEDO]), voxel, vec4(base.rgb, 1.0));
+    imageAtomicRGBA8Avg(CoherentWords(target[WORDS_NORMAL]), voxel, vec4(normal * 0.5 + 0.5, 1.0));
     if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u) {
-        average_emission(voxel, vec4(emission, 1.0));
+        imageAtomicRGBA8Avg(CoherentWords(target[WORDS_SPREAD]), voxel, vec4(emission, 1.0));
     }
     if (static_pass && (frame.grid_info.w & FLAG_DYNAMIC) != 0u) {
-        atomicOr(static_flag[voxel], 1u);  // atomic: draws write it without barriers between
+        // Atomic: draws write it without barriers between.
+        atomicOr(Words(target[WORDS_EMISSION]).w[voxel], 1u);
     }
 #else
     // Every voxel of this column the triangle's plane crosses within the pixel, clamped to the
@@ -159,32 +152,37 @@ void main() {
         int z0 = int(floor(min(lo, hi)));
         int z1 = int(floor(max(lo, hi)));
         ivec3 nq = ivec3(round(face_normal * FIXED_ONE));
+        Words albedo_accum = Words(target[WORDS_ALBEDO]);
+        Words normal_accum = Words(target[WORDS_NORMAL]);
+        Words spread_accum = Words(target[WORDS_SPREAD]);
+        Words emission_accum = Words(target[WORDS_EMISSION]);
         for (int z = z0; z <= z1 && z <= z0 + 2; z++) {
             ivec3 c = unswizzle(ivec3(ivec2(px), z));
             if (!in_grid(c)) continue;
             uint i = voxel_index(c) * ALBEDO_STRIDE;
-            atomicAdd(albedo_accum[i], 1u);
-            atomicAdd(albedo_accum[i + 1u], a.r);
-            atomicAdd(albedo_accum[i + 2u], a.g);
-            atomicAdd(albedo_accum[i + 3u], a.b);
+            atomicAdd(albedo_accum.w[i], 1u);
+            atomicAdd(albedo_accum.w[i + 1u], a.r);
+            atomicAdd(albedo_accum.w[i + 2u], a.g);
+            atomicAdd(albedo_accum.w[i + 3u], a.b);
             uint k = voxel_index(c) * NORMAL_STRIDE;
-            atomicAdd(normal_accum[k], uint(nq.x));
-            atomicAdd(normal_accum[k + 1u], uint(nq.y));
-            atomicAdd(normal_accum[k + 2u], uint(nq.z));
-            atomicAdd(normal_accum[k + 3u], n2.x);
-            atomicAdd(normal_accum[k + 4u], n2.y);
-            atomicAdd(normal_accum[k + 5u], n2.z);
+            atomicAdd(normal_accum.w[k], uint(nq.x));
+            atomicAdd(normal_accum.w[k + 1u], uint(nq.y));
+            atomicAdd(normal_accum.w[k + 2u], uint(nq.z));
             // Where the surface crosses this voxel along the projection's axis, from its centre
             // (across that axis the pixel's centre is the voxel's): cones see a voxel's light
             // only from in front of its surface (cone_tracing.glsl), wherever in it that lies.
             float along = clamp(depth + shift, float(z), float(z + 1)) - (float(z) + 0.5);
-            atomicAdd(normal_accum[k + 6u], uint(int(round(along * FIXED_ONE))));
+            atomicAdd(normal_accum.w[k + 3u], uint(int(round(along * FIXED_ONE))));
+            uint q = voxel_index(c) * SPREAD_STRIDE;
+            atomicAdd(spread_accum.w[q], n2.x);
+            atomicAdd(spread_accum.w[q + 1u], n2.y);
+            atomicAdd(spread_accum.w[q + 2u], n2.z);
             if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u) {
                 uint j = voxel_index(c) * EMISSION_STRIDE;
-                atomicAdd(emission_accum[j], e.r);
-                atomicAdd(emission_accum[j + 1u], e.g);
-                atomicAdd(emission_accum[j + 2u], e.b);
-                atomicAdd(emission_accum[j + 3u], cov);
+                atomicAdd(emission_accum.w[j], e.r);
+                atomicAdd(emission_accum.w[j + 1u], e.g);
+                atomicAdd(emission_accum.w[j + 2u], e.b);
+                atomicAdd(emission_accum.w[j + 3u], cov);
             }
         }
     }

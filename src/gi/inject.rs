@@ -1,53 +1,27 @@
 //! Step 2: voxel illumination. Direct light per voxel (shadowed by the shadow maps), plus
 //! emission, into the radiance volume.
 
-use super::volumes::{Volumes, VoxelData};
+use super::volumes::Volumes;
 use crate::render::pipelines::{self, Desc, DescriptorPool, Pipeline, Set, SetLayout, Spec};
 use crate::vk::{vk, Access, Context, Graph, Image, VkResult};
 use std::sync::Arc;
 
-/// The voxel data as the compute passes read it (bindings 0 to 3, 7 and 8 of
-/// glsl/voxel_data.glsl).
-pub fn voxel_data_descs<'a>(volumes: &'a Volumes) -> Vec<(u32, Desc<'a>)> {
-    match &volumes.data {
-        VoxelData::Sums {
-            static_sums: s,
-            dynamic_sums: d,
-        } => {
-            let or_dummy = |b: Option<&'a crate::vk::Buffer>, i: usize| {
-                Desc::Storage(b.unwrap_or(&volumes.dummies[i]))
-            };
-            vec![
-                (0, Desc::Storage(&s.albedo)),
-                (1, or_dummy(s.emission.as_ref(), 1)),
-                (2, or_dummy(d.as_ref().map(|d| &d.albedo), 2)),
-                (3, or_dummy(d.as_ref().and_then(|d| d.emission.as_ref()), 3)),
-                (7, Desc::Storage(&s.normal)),
-                (8, or_dummy(d.as_ref().map(|d| &d.normal), 4)),
-            ]
-        }
-        VoxelData::Paper {
-            albedo,
-            normal,
-            emission,
-            ..
-        } => vec![
-            (0, Desc::Storage(albedo)),
-            (1, Desc::Storage(normal)),
-            (
-                2,
-                Desc::Storage(emission.as_ref().unwrap_or(&volumes.dummies[2])),
-            ),
-        ],
-    }
+/// The voxel data as the compute passes read it (glsl/voxel_data.glsl): the address tables of
+/// the static pass (binding 0) and the dynamic one (binding 2; zeros without dynamic geometry).
+pub fn voxel_data_descs(volumes: &Volumes) -> Vec<(u32, Desc<'_>)> {
+    vec![
+        (0, Desc::Storage(&volumes.words[0])),
+        (2, Desc::Storage(&volumes.words[1])),
+    ]
 }
 
-/// Declares a compute read of the voxel data.
+/// Declares a compute read of the voxel data: the words through their addresses, and the
+/// tables of addresses.
 pub fn read_voxel_data<'g, 'a, 'r>(
     mut pass: crate::vk::graph::PassBuilder<'g, 'a, 'r>,
     volumes: &'r Volumes,
 ) -> crate::vk::graph::PassBuilder<'g, 'a, 'r> {
-    for b in volumes.dummies.iter().chain(volumes.data.read_by_shaders()) {
+    for b in volumes.words.iter().chain(volumes.data.read_by_shaders()) {
         pass = pass.buffer(b, Access::ComputeStorageRead);
     }
     pass

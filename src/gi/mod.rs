@@ -10,7 +10,7 @@ mod trace;
 mod volumes;
 mod voxelize;
 
-pub use readback::VoxelDump;
+pub use readback::{NonFinite, VoxelDump};
 pub use volumes::{VolumeInfo, Volumes};
 
 use crate::render::pipelines::{DescriptorPool, SetLayout};

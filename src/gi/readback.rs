@@ -92,6 +92,7 @@ impl Gi {
                 static_sums,
                 dynamic_sums,
             } => {
+                // The squared normals are not decoded.
                 let passes = [
                     (["sa", "sn", "se"], Some(static_sums)),
                     (["da", "dn", "de"], dynamic_sums.as_deref()),
@@ -242,7 +243,8 @@ impl Gi {
             let (sa_stride, sn_stride) = (ALBEDO_STRIDE as usize, NORMAL_STRIDE as usize);
             let es = EMISSION_STRIDE as usize;
             for v in 0..nv {
-                // The words in the order of glsl/voxel_common.glsl: count, albedo, normal.
+                // The words in the order of glsl/voxel_common.glsl: count, albedo, normal,
+                // where the surfaces lie.
                 let mut w: Vec<u32> = sa[v * sa_stride..(v + 1) * sa_stride]
                     .iter()
                     .chain(&sn[v * sn_stride..(v + 1) * sn_stride])
@@ -332,6 +334,116 @@ impl Gi {
             );
         }
         Ok(dump)
+    }
+}
+
+/// Non-finite values in the volumes, by kind, from `Gi::count_non_finite`.
+#[derive(Clone, Debug, Default)]
+pub struct NonFinite {
+    /// Voxels of the radiance volume.
+    pub radiance: usize,
+    /// Texels of the directional volumes and of the volumes beside them, every level.
+    pub directional: usize,
+    /// Voxels of the small emitters' volume.
+    pub small_emission: usize,
+}
+
+impl Gi {
+    /// Counts non-finite values in the lit volumes, one mip level at a time, so that a 512^3
+    /// grid needs no more host memory than its largest level (`read_voxels` holds every
+    /// volume, decoded, at once). Voxelization's words are integers (sums, counts, RGBA8) and
+    /// decode to finite values; the paper's volumes are all RGBA8. Waits for the GPU.
+    pub fn count_non_finite(
+        &self,
+        ctx: &Arc<Context>,
+        states: &mut ResourceStates,
+    ) -> VkResult<NonFinite> {
+        let mut found = NonFinite::default();
+        if self.lighting.is_none() || self.settings.paper {
+            return Ok(found);
+        }
+        let n = self.volumes.grid.resolution;
+        // (image, bytes a texel, level, side, which count)
+        let mut levels: Vec<(&Image, u64, u32, u32, u8)> =
+            vec![(&self.volumes.radiance, 8, 0, n, 0)];
+        for img in self.volumes.directional() {
+            let side = img.desc.extent.width;
+            for level in 0..img.desc.mip_levels {
+                levels.push((img, 8, level, (side >> level).max(1), 1));
+            }
+        }
+        if let (Some(small), true) = (&self.volumes.small_emission, self.emissive) {
+            levels.push((small, 4, 0, n, 2));
+        }
+        let largest = levels
+            .iter()
+            .map(|&(_, t, _, side, _)| (side as u64).pow(3) * t)
+            .max()
+            .unwrap_or(4);
+        let host = Buffer::new(
+            ctx,
+            "non-finite readback",
+            largest,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )?;
+        for (img, texel, level, side, kind) in levels {
+            ctx.one_shot(|cmd| {
+                let mut g = Graph::new(ctx, cmd, states, None);
+                g.pass("non-finite readback")
+                    .buffer(&host, Access::TransferWrite)
+                    .image(img, Access::TransferRead)
+                    .untimed()
+                    .record(|cmd| unsafe {
+                        ctx.device.cmd_copy_image_to_buffer(
+                            cmd,
+                            img.raw,
+                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+                            host.raw,
+                            &[vk::BufferImageCopy::default()
+                                .image_subresource(vk::ImageSubresourceLayers {
+                                    aspect_mask: vk::ImageAspectFlags::COLOR,
+                                    mip_level: level,
+                                    base_array_layer: 0,
+                                    layer_count: 1,
+                                })
+                                .image_extent(vk::Extent3D {
+                                    width: side,
+                                    height: side,
+                                    depth: side,
+                                })],
+                        )
+                    });
+                g.pass("non-finite readback to host")
+                    .buffer(&host, Access::HostRead)
+                    .untimed()
+                    .record(|_| {});
+            })?;
+            let bytes = host.mapped().expect("readback is host-visible");
+            let bytes = &bytes[..((side as u64).pow(3) * texel) as usize];
+            let bad = if texel == 8 {
+                // Four half floats a texel; an exponent of all ones is Inf or NaN.
+                bytes
+                    .chunks_exact(8)
+                    .filter(|t| {
+                        t.chunks_exact(2)
+                            .any(|h| u16::from_le_bytes([h[0], h[1]]) & 0x7c00 == 0x7c00)
+                    })
+                    .count()
+            } else {
+                bytes
+                    .chunks_exact(4)
+                    .filter(|f| !f32::from_le_bytes([f[0], f[1], f[2], f[3]]).is_finite())
+                    .count()
+            };
+            match kind {
+                0 => found.radiance += bad,
+                1 => found.directional += bad,
+                _ => found.small_emission += bad,
+            }
+        }
+        states.forget(host.raw);
+        Ok(found)
     }
 }
 

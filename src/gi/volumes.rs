@@ -5,11 +5,12 @@ use crate::vk::{vk, Buffer, Context, Image, ImageDesc, Sampler, VkError, VkResul
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
-/// uints per voxel of the default accumulators (glsl/voxel_common.glsl), split in two buffers
-/// so that a 512^3 grid binds within a 4 GiB maxStorageBufferRange: the count and albedo sums,
-/// and the normal sums.
+/// uints per voxel of the default accumulators (glsl/voxel_common.glsl), in three buffers so
+/// that each stays within a 2 GiB allocation at 512^3: the count and albedo sums, the normal
+/// sums and where the surfaces cross the voxel, and the squared normals (spread).
 pub const ALBEDO_STRIDE: u64 = 4;
-pub const NORMAL_STRIDE: u64 = 7;
+pub const NORMAL_STRIDE: u64 = 4;
+pub const SPREAD_STRIDE: u64 = 3;
 /// Emission sums: RGB weighted by coverage, then the emitting surfaces' coverage (fixed point,
 /// voxelize.frag).
 pub const EMISSION_STRIDE: u64 = 4;
@@ -18,18 +19,29 @@ pub const EMISSION_STRIDE: u64 = 4;
 pub struct Sums {
     /// Count, then albedo r g b (ALBEDO_STRIDE words a voxel).
     pub albedo: Buffer,
-    /// Normal, squared normal, then where the surfaces cross the voxel (NORMAL_STRIDE words a
-    /// voxel).
+    /// Normal, then where the surfaces cross the voxel (NORMAL_STRIDE words a voxel).
     pub normal: Buffer,
+    /// Squared normal (SPREAD_STRIDE words a voxel).
+    pub spread: Buffer,
     /// When the scene emits (EMISSION_STRIDE words a voxel).
     pub emission: Option<Buffer>,
 }
 
 impl Sums {
     fn buffers(&self) -> impl Iterator<Item = &Buffer> {
-        [&self.albedo, &self.normal]
+        [&self.albedo, &self.normal, &self.spread]
             .into_iter()
             .chain(&self.emission)
+    }
+
+    /// In the order of a pass's address table (glsl/voxel_common.glsl: WORDS_*).
+    fn addresses(&self) -> [u64; 4] {
+        [
+            self.albedo.address(),
+            self.normal.address(),
+            self.spread.address(),
+            self.emission.as_ref().map_or(0, |b| b.address()),
+        ]
     }
 }
 
@@ -92,6 +104,35 @@ impl VoxelData {
                 .collect(),
         }
     }
+
+    /// The address tables of the static and the dynamic pass (zeros where absent); --paper:
+    /// albedo, normal, emission, flag, in the first.
+    fn addresses(&self) -> [[u64; 4]; 2] {
+        let or_zero = |b: Option<&Buffer>| b.map_or(0, |b| b.address());
+        match self {
+            VoxelData::Sums {
+                static_sums,
+                dynamic_sums,
+            } => [
+                static_sums.addresses(),
+                dynamic_sums.as_ref().map_or([0; 4], |d| d.addresses()),
+            ],
+            VoxelData::Paper {
+                albedo,
+                normal,
+                emission,
+                flag,
+            } => [
+                [
+                    albedo.address(),
+                    normal.address(),
+                    or_zero(emission.as_ref()),
+                    or_zero(flag.as_ref()),
+                ],
+                [0; 4],
+            ],
+        }
+    }
 }
 
 /// Name and bytes of one volume, for `voxgi info`.
@@ -104,6 +145,12 @@ pub struct VolumeInfo {
 pub struct Volumes {
     pub grid: VoxelGrid,
     pub data: VoxelData,
+    /// Where the voxel words lie, per voxelization pass (static, dynamic): four device
+    /// addresses each (VoxelData::addresses), which the shaders read from these small buffers
+    /// and reach the words through (GL_EXT_buffer_reference): a 512^3 grid's sums are larger
+    /// than a storage buffer's descriptor may span (maxStorageBufferRange: 128 MiB on
+    /// lavapipe).
+    pub words: [Buffer; 2],
     /// Outgoing radiance per voxel, premultiplied by opacity (RGBA16F; RGBA8 for --paper).
     pub radiance: Image,
     /// The direction each voxel sends its light (RGBA8 signed, xyz; length 1: one side only,
@@ -133,9 +180,6 @@ pub struct Volumes {
     pub light_pos: Option<Image>,
     /// Trilinear, transparent black outside the grid.
     pub sampler: Sampler,
-    /// Stand-ins for bindings a mode leaves unused, one per binding role so that no two
-    /// bindings of a pass alias the same buffer.
-    pub dummies: [Buffer; 5],
     pub info: Vec<VolumeInfo>,
 }
 
@@ -162,28 +206,29 @@ impl Volumes {
         // TRANSFER_SRC: the debug readback copies them.
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER
             | vk::BufferUsageFlags::TRANSFER_DST
-            | vk::BufferUsageFlags::TRANSFER_SRC;
-        // Checked before allocating anything: a larger buffer allocates, then fails validation
-        // (or reads garbage) when bound. The widest buffer of the mode sets the largest grid.
-        let limit = ctx.properties.limits.max_storage_buffer_range as u64;
-        let (widest, stride) = if settings.paper {
-            ("voxel albedo (RGBA8 words)", 1)
+            | vk::BufferUsageFlags::TRANSFER_SRC
+            | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
+        // Checked before allocating anything: the largest single allocation and the largest 3D
+        // image set the largest grid. The widest per-voxel volume is the radiance (RGBA16F,
+        // RGBA8 for --paper): wider than any one buffer of words.
+        let limit = ctx.max_allocation;
+        let (widest, texel) = if settings.paper {
+            ("voxel radiance (RGBA8)", 4)
         } else {
-            (
-                "static voxel normal sums",
-                NORMAL_STRIDE.max(ALBEDO_STRIDE).max(EMISSION_STRIDE),
-            )
+            ("voxel radiance (RGBA16F)", 8)
         };
-        if voxels * stride * 4 > limit {
-            let largest = (1..=n)
+        let max_side = ctx.properties.limits.max_image_dimension3_d;
+        if voxels * texel > limit || n > max_side {
+            let largest = (1..=n.min(max_side))
                 .rev()
-                .find(|&k| (k as u64).pow(3) * stride * 4 <= limit)
+                .find(|&k| (k as u64).pow(3) * texel <= limit)
                 .unwrap_or(1);
             return Err(VkError::GridTooLarge {
                 grid: n,
                 what: widest.into(),
-                bytes: voxels * stride * 4,
+                bytes: voxels * texel,
                 limit,
+                max_side,
                 largest,
             });
         }
@@ -217,6 +262,7 @@ impl Volumes {
                         ALBEDO_STRIDE,
                     )?,
                     normal: buffer(&format!("{pass} voxel normal sums"), NORMAL_STRIDE)?,
+                    spread: buffer(&format!("{pass} voxel squared normal sums"), SPREAD_STRIDE)?,
                     emission: emissive
                         .then(|| buffer(&format!("{pass} emission sums"), EMISSION_STRIDE))
                         .transpose()?,
@@ -323,19 +369,19 @@ impl Volumes {
                 .border_color(vk::BorderColor::FLOAT_TRANSPARENT_BLACK)
                 .max_lod(vk::LOD_CLAMP_NONE),
         )?;
-        let dummy = |i: usize| {
-            Buffer::new(
-                ctx,
-                &format!("unused binding {i}"),
-                16,
-                vk::BufferUsageFlags::STORAGE_BUFFER,
-                MemoryLocation::GpuOnly,
-            )
+        let table = |name: &str, addresses: [u64; 4]| {
+            let bytes: Vec<u8> = addresses.iter().flat_map(|a| a.to_le_bytes()).collect();
+            Buffer::with_data(ctx, name, &bytes, vk::BufferUsageFlags::STORAGE_BUFFER)
         };
-        let dummies = [dummy(0)?, dummy(1)?, dummy(2)?, dummy(3)?, dummy(4)?];
+        let [s, d] = data.addresses();
+        let words = [
+            table("static voxel word addresses", s)?,
+            table("dynamic voxel word addresses", d)?,
+        ];
         Ok(Volumes {
             grid,
             data,
+            words,
             radiance,
             emit_dir,
             small_emission,
@@ -343,7 +389,6 @@ impl Volumes {
             light_dir,
             light_pos,
             sampler,
-            dummies,
             info,
         })
     }

@@ -1,12 +1,12 @@
 //! Step 1: voxelization. Static geometry is voxelized once (again when a static node moves);
 //! dynamic geometry is cleared and voxelized every frame while static voxels stay.
 
-use super::volumes::{Sums, Volumes, VoxelData};
+use super::volumes::{Volumes, VoxelData};
 use crate::render::pipelines::{
     self, Desc, DescriptorPool, GraphicsDesc, Pipeline, Set, SetLayout, Spec,
 };
 use crate::render::GpuScene;
-use crate::vk::{vk, Access, Buffer, Context, Graph, VkResult};
+use crate::vk::{vk, Access, Context, Graph, VkResult};
 use std::sync::Arc;
 
 /// Push-constant flag: the static pass (the paper's pass writes its flag volume then).
@@ -21,75 +21,40 @@ pub struct Voxelizer {
 }
 
 impl Voxelizer {
-    pub fn new<'a>(
+    pub fn new(
         ctx: &Arc<Context>,
         pool: &DescriptorPool,
-        volumes: &'a Volumes,
+        volumes: &Volumes,
         scene_layout: &SetLayout,
         material_layout: &SetLayout,
         paper: bool,
     ) -> VkResult<Voxelizer> {
         let frag = vk::ShaderStageFlags::FRAGMENT;
-        let (static_target, dynamic_target, clear_dynamic) = match &volumes.data {
+        // Each pass reaches its words through its table of addresses (binding 0).
+        let static_target = pool.set(frag, &[(0, Desc::Storage(&volumes.words[0]))])?;
+        let dynamic_target = match &volumes.data {
             VoxelData::Sums {
-                static_sums,
-                dynamic_sums,
-            } => {
-                let target = |sums: &'a Sums| {
-                    let emission = sums.emission.as_ref().unwrap_or(&volumes.dummies[1]);
-                    pool.set(
-                        frag,
-                        &[
-                            (0, Desc::Storage(&sums.albedo)),
-                            (1, Desc::Storage(emission)),
-                            (2, Desc::Storage(&sums.normal)),
-                        ],
-                    )
-                };
-                let s = target(static_sums)?;
-                let d = dynamic_sums.as_deref().map(target).transpose()?;
-                (s, d, None)
+                dynamic_sums: Some(_),
+                ..
+            } => Some(pool.set(frag, &[(0, Desc::Storage(&volumes.words[1]))])?),
+            _ => None,
+        };
+        let clear_dynamic = match &volumes.data {
+            VoxelData::Paper { flag: Some(_), .. } => {
+                let set = pool.set(
+                    vk::ShaderStageFlags::COMPUTE,
+                    &[(0, Desc::Storage(&volumes.words[0]))],
+                )?;
+                let p = pipelines::compute(
+                    ctx,
+                    "clear_dynamic.comp",
+                    &[&set.layout],
+                    4,
+                    &Spec(vec![]),
+                )?;
+                Some((p, set))
             }
-            VoxelData::Paper {
-                albedo,
-                normal,
-                emission,
-                flag,
-            } => {
-                let or_dummy = |b: &'a Option<Buffer>, i: usize| {
-                    Desc::Storage(b.as_ref().unwrap_or(&volumes.dummies[i]))
-                };
-                let descs = [
-                    (0, Desc::Storage(albedo)),
-                    (1, Desc::Storage(normal)),
-                    (2, or_dummy(emission, 2)),
-                    (3, or_dummy(flag, 3)),
-                ];
-                let s = pool.set(frag, &descs)?;
-                let clear = match flag {
-                    Some(_) => {
-                        let set = pool.set(
-                            vk::ShaderStageFlags::COMPUTE,
-                            &[
-                                (0, Desc::Storage(albedo)),
-                                (1, Desc::Storage(normal)),
-                                (2, or_dummy(emission, 2)),
-                                (3, or_dummy(flag, 3)),
-                            ],
-                        )?;
-                        let p = pipelines::compute(
-                            ctx,
-                            "clear_dynamic.comp",
-                            &[&set.layout],
-                            0,
-                            &Spec(vec![]),
-                        )?;
-                        Some((p, set))
-                    }
-                    None => None,
-                };
-                (s, None, clear)
-            }
+            _ => None,
         };
         let (geom, frag_shader) = if paper {
             ("voxelize.geom:PAPER", "voxelize.frag:PAPER")
@@ -130,12 +95,8 @@ impl Voxelizer {
         dynamic: bool,
         access: Access,
     ) -> crate::vk::graph::PassBuilder<'g, 'a, 'r> {
-        let mut pass = pass;
-        for b in volumes
-            .dummies
-            .iter()
-            .chain(volumes.data.written_by(dynamic))
-        {
+        let mut pass = pass.buffer(&volumes.words[dynamic as usize], Access::GraphicsBufferRead);
+        for b in volumes.data.written_by(dynamic) {
             pass = pass.buffer(b, access);
         }
         pass
@@ -171,7 +132,9 @@ impl Voxelizer {
                 true,
                 Some((p, set)),
             ) => {
-                let mut pass = g.pass(clear_name);
+                let mut pass = g
+                    .pass(clear_name)
+                    .buffer(&volumes.words[0], Access::ComputeStorageRead);
                 for b in [Some(albedo), Some(normal), emission.as_ref()]
                     .into_iter()
                     .flatten()
@@ -180,9 +143,6 @@ impl Voxelizer {
                 }
                 if let Some(f) = flag {
                     pass = pass.buffer(f, Access::ComputeStorageRead);
-                }
-                for b in &volumes.dummies {
-                    pass = pass.buffer(b, Access::ComputeStorageReadWrite);
                 }
                 pass.record(|cmd| unsafe {
                     d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, p.raw);
@@ -194,15 +154,25 @@ impl Voxelizer {
                         &[set.raw],
                         &[],
                     );
+                    let voxels = n * n * n;
+                    d.cmd_push_constants(
+                        cmd,
+                        p.layout,
+                        vk::ShaderStageFlags::COMPUTE,
+                        0,
+                        &voxels.to_le_bytes(),
+                    );
                     // In rows: 65535 groups is all a dimension must allow (162^3 voxels).
-                    let groups = (n * n * n).div_ceil(64);
+                    let groups = voxels.div_ceil(64);
                     d.cmd_dispatch(cmd, groups.min(4096), groups.div_ceil(4096), 1);
                 });
             }
             _ => {
                 // A fill clears what this pass rebuilds (the paper's static pass clears all).
-                let pass =
-                    Self::declare(g.pass(clear_name), volumes, dynamic, Access::TransferWrite);
+                let mut pass = g.pass(clear_name);
+                for b in volumes.data.written_by(dynamic) {
+                    pass = pass.buffer(b, Access::TransferWrite);
+                }
                 let buffers: Vec<vk::Buffer> = volumes
                     .data
                     .written_by(dynamic)

@@ -263,31 +263,16 @@ impl Env {
             pixels: r.radiance(),
         };
         self.check_image("image", &img);
-        if let Some(v) = r.read_voxels()? {
-            let voxels = (0..v.filled.len())
-                .filter(|&i| {
-                    !(v.albedo[i].is_finite()
-                        && v.normal[i].is_finite()
-                        && v.emission[i].is_finite()
-                        && v.radiance.as_ref().is_none_or(|r| r[i].is_finite()))
-                })
-                .count();
-            let directional = v.directional.iter().flatten();
-            let small = v.small_emission.iter().flatten();
-            for (what, bad) in [
-                ("voxels", voxels),
-                (
-                    "directional volume texels",
-                    directional.filter(|t| !t.is_finite()).count(),
-                ),
-                (
-                    "small emitters' voxels",
-                    small.filter(|e| !e.is_finite()).count(),
-                ),
+        // One level at a time: a 512^3 grid's volumes, decoded at once, would not fit in memory.
+        if let Some(bad) = r.count_non_finite()? {
+            for (what, count) in [
+                ("voxels", bad.radiance),
+                ("directional volume texels", bad.directional),
+                ("small emitters' voxels", bad.small_emission),
             ] {
-                if bad > 0 {
+                if count > 0 {
                     self.non_finite
-                        .push(format!("volumes: {bad} non-finite {what}"));
+                        .push(format!("volumes: {count} non-finite {what}"));
                 }
             }
         }

@@ -1133,6 +1133,15 @@ impl Renderer {
         }
     }
 
+    /// Non-finite values in the lit volumes as the last frame left them, one level at a time
+    /// (None in direct mode).
+    pub fn count_non_finite(&mut self) -> VkResult<Option<crate::gi::NonFinite>> {
+        match &self.gi {
+            Some(gi) => Ok(Some(gi.count_non_finite(&self.ctx, &mut self.states)?)),
+            None => Ok(None),
+        }
+    }
+
     /// Linear radiance, RGB per pixel, row 0 at the top (after `render(true)`).
     pub fn radiance(&self) -> Vec<[f32; 3]> {
         let bytes = self

@@ -87,6 +87,8 @@ pub struct Context {
     pub physical_device: vk::PhysicalDevice,
     pub device_info: DeviceInfo,
     pub properties: vk::PhysicalDeviceProperties,
+    /// The largest single allocation (VkPhysicalDeviceMaintenance3Properties).
+    pub max_allocation: u64,
     pub device: ash::Device,
     /// Labels and object names; None where VK_EXT_debug_utils is absent.
     pub debug_device: Option<ext::debug_utils::Device>,
@@ -243,6 +245,7 @@ fn missing_requirements(
         (f13.synchronization2, "synchronization2"),
         (f12.host_query_reset, "hostQueryReset"),
         (f12.scalar_block_layout, "scalarBlockLayout"),
+        (f12.buffer_device_address, "bufferDeviceAddress"),
     ];
     for (have, name) in checks {
         if have == vk::FALSE {
@@ -403,9 +406,12 @@ impl Context {
             return Err(fail(VkError::Missing { device, missing }));
         };
 
-        let driver = {
+        let (driver, max_allocation) = {
             let mut drv = vk::PhysicalDeviceDriverProperties::default();
-            let mut p2 = vk::PhysicalDeviceProperties2::default().push_next(&mut drv);
+            let mut m3 = vk::PhysicalDeviceMaintenance3Properties::default();
+            let mut p2 = vk::PhysicalDeviceProperties2::default()
+                .push_next(&mut drv)
+                .push_next(&mut m3);
             unsafe { instance.get_physical_device_properties2(physical_device, &mut p2) };
             let name = drv
                 .driver_name_as_c_str()
@@ -415,7 +421,10 @@ impl Context {
                 .driver_info_as_c_str()
                 .map(|s| s.to_string_lossy().into_owned())
                 .unwrap_or_default();
-            format!("{name} {info}").trim().to_string()
+            (
+                format!("{name} {info}").trim().to_string(),
+                m3.max_memory_allocation_size,
+            )
         };
         let device_info = DeviceInfo {
             name: device_name(&properties),
@@ -435,7 +444,8 @@ impl Context {
             .depth_clamp(true);
         let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
             .host_query_reset(true)
-            .scalar_block_layout(true);
+            .scalar_block_layout(true)
+            .buffer_device_address(true);
         let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
             .dynamic_rendering(true)
             .synchronization2(true);
@@ -469,7 +479,8 @@ impl Context {
                 log_leaks_on_shutdown: false, // reported by Context::drop instead
                 ..Default::default()
             },
-            buffer_device_address: false,
+            // The voxel sums are reached by address (glsl/voxel_common.glsl).
+            buffer_device_address: true,
             allocation_sizes: Default::default(),
         }) {
             Ok(a) => a,
@@ -506,6 +517,7 @@ impl Context {
             physical_device,
             device_info,
             properties,
+            max_allocation,
             device,
             debug_device,
             queue_family,

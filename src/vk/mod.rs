@@ -39,8 +39,9 @@ pub enum VkError {
     #[error("shader {0} is not among the compiled shaders")]
     NoShader(String),
     #[error(
-        "a {grid}^3 grid needs {} MiB for {what}, more than this device binds in one storage \
-         buffer (maxStorageBufferRange: {} MiB); use --voxels {largest} or less",
+        "a {grid}^3 grid needs {} MiB for {what}; this device allocates at most {} MiB at once \
+         (maxMemoryAllocationSize) and makes 3D images of at most {max_side} texels a side \
+         (maxImageDimension3D); use --voxels {largest} or less",
         bytes >> 20,
         limit >> 20
     )]
@@ -49,6 +50,7 @@ pub enum VkError {
         what: String,
         bytes: u64,
         limit: u64,
+        max_side: u32,
         largest: u32,
     },
 }

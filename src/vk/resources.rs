@@ -80,6 +80,12 @@ impl Buffer {
         Ok(b)
     }
 
+    /// Where shaders reach it (GL_EXT_buffer_reference); made with SHADER_DEVICE_ADDRESS.
+    pub fn address(&self) -> u64 {
+        let info = vk::BufferDeviceAddressInfo::default().buffer(self.raw);
+        unsafe { self.ctx.device.get_buffer_device_address(&info) }
+    }
+
     /// Host-visible bytes (None for device-only memory).
     pub fn mapped(&self) -> Option<&[u8]> {
         self.allocation.as_ref()?.mapped_slice()
