@@ -444,8 +444,9 @@ fn emissive_strengths_survive_in_the_voxels() {
 
 #[test]
 fn a_grid_past_the_storage_buffer_range_voxelizes_and_one_past_the_device_is_refused() {
-    // 16384^3 needs more than any device allocates for its radiance volume; the error names
-    // the largest grid that fits, and one more is refused the same way.
+    // 16384^3 needs more than any device allocates at once for its widest volume; the error
+    // names the largest grid that fits (512^3 on lavapipe, which tests/hard_cases.rs renders as
+    // grid-512), and one more is refused the same way.
     let s = lamp_over_floor(1.0, 0.2, 1.0, 4.0);
     let ctx = context();
     let refused = |n: u32| match voxgi::render::Renderer::new(

@@ -209,13 +209,14 @@ impl Volumes {
             | vk::BufferUsageFlags::TRANSFER_SRC
             | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
         // Checked before allocating anything: the largest single allocation and the largest 3D
-        // image set the largest grid. The widest per-voxel volume is the radiance (RGBA16F,
-        // RGBA8 for --paper): wider than any one buffer of words.
+        // image set the largest grid. The widest per-voxel volume: the count and albedo sums
+        // (ties with the normal and emission sums; twice the radiance's RGBA16F), or for
+        // --paper one word (as wide as its RGBA8 radiance).
         let limit = ctx.max_allocation;
         let (widest, texel) = if settings.paper {
-            ("voxel radiance (RGBA8)", 4)
+            ("voxel albedo (RGBA8 words)", 4)
         } else {
-            ("voxel radiance (RGBA16F)", 8)
+            ("static voxel counts and albedo sums", ALBEDO_STRIDE * 4)
         };
         let max_side = ctx.properties.limits.max_image_dimension3_d;
         if voxels * texel > limit || n > max_side {
