@@ -11,8 +11,13 @@
 // lavapipe). Each voxelization pass has a table of four addresses (volumes.rs), indexed by:
 const uint WORDS_ALBEDO = 0u;
 const uint WORDS_NORMAL = 1u;
-const uint WORDS_SPREAD = 2u;    // PAPER: the emission
-const uint WORDS_EMISSION = 3u;  // PAPER: the static flags
+const uint WORDS_SPREAD = 2u;
+const uint WORDS_EMISSION = 3u;
+// PAPER: one table, of its RGBA8 volumes and its static flags.
+const uint PAPER_ALBEDO = 0u;
+const uint PAPER_NORMAL = 1u;
+const uint PAPER_EMISSION = 2u;
+const uint PAPER_FLAG = 3u;
 layout(buffer_reference, std430, buffer_reference_align = 4) buffer Words { uint w[]; };
 
 // Per voxel, in three buffers (each within a 2 GiB allocation at 512^3): count, albedo r g b;

@@ -18,25 +18,25 @@ struct Voxel {
 };
 
 #ifdef PAPER
-// The paper's words: albedo, normal, emission (WORDS_ALBEDO, WORDS_NORMAL, WORDS_SPREAD).
+// The paper's words (PAPER_*).
 layout(set = VOXEL_SET, binding = 0, std430) readonly buffer PaperWords { uvec2 paper_words[4]; };
 
 bool voxel_filled(ivec3 c) {
-    return (Words(paper_words[WORDS_ALBEDO]).w[voxel_index(c)] >> 24u) != 0u;
+    return (Words(paper_words[PAPER_ALBEDO]).w[voxel_index(c)] >> 24u) != 0u;
 }
 
 Voxel load_voxel(ivec3 c) {
     Voxel v;
     uint i = voxel_index(c);
-    vec4 a = unpack_rgba8(Words(paper_words[WORDS_ALBEDO]).w[i]);
+    vec4 a = unpack_rgba8(Words(paper_words[PAPER_ALBEDO]).w[i]);
     v.filled = a.a > 0.0;
     v.albedo = a.rgb / 255.0;
-    vec3 n = unpack_rgba8(Words(paper_words[WORDS_NORMAL]).w[i]).rgb / 255.0 * 2.0 - 1.0;
+    vec3 n = unpack_rgba8(Words(paper_words[PAPER_NORMAL]).w[i]).rgb / 255.0 * 2.0 - 1.0;
     v.agreement = length(n);
     v.normal = v.agreement > 0.0 ? n / v.agreement : vec3(0.0);
     v.axis_weights = v.normal * v.normal;
     v.emission = (frame.grid_info.w & FLAG_EMISSIVE) != 0u
-        ? unpack_rgba8(Words(paper_words[WORDS_SPREAD]).w[i]).rgb / 255.0 : vec3(0.0);
+        ? unpack_rgba8(Words(paper_words[PAPER_EMISSION]).w[i]).rgb / 255.0 : vec3(0.0);
     v.offset = vec3(0.0);
     return v;
 }

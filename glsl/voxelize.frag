@@ -28,7 +28,7 @@ layout(location = 6) flat in vec4 g_tri01;
 layout(location = 7) flat in vec2 g_tri2;
 #endif
 
-// This pass's words: their addresses (voxel_common.glsl: WORDS_*).
+// This pass's words: their addresses (voxel_common.glsl: WORDS_*, or PAPER_*).
 layout(set = 2, binding = 0, std430) readonly buffer Target { uvec2 target[4]; };
 #ifdef PAPER
 #include "atomic_average.glsl"
@@ -94,18 +94,20 @@ void main() {
     if (!in_grid(c)) return;  // dilated triangles reach -1 and N: no-ops in GL, UB in Vulkan
     uint voxel = voxel_index(c);
     bool static_pass = (draw.flags & 2u) != 0u;
-    if (!static_pass && (frame.grid_info.w & FLAG_DYNAMIC) != 0u
-        && Words(target[WORDS_EMISSION]).w[voxel] != 0u) {
+    CoherentWords albedo_grid = CoherentWords(target[PAPER_ALBEDO]);
+    CoherentWords normal_grid = CoherentWords(target[PAPER_NORMAL]);
+    CoherentWords emission_grid = CoherentWords(target[PAPER_EMISSION]);
+    Words static_flag = Words(target[PAPER_FLAG]);
+    if (!static_pass && (frame.grid_info.w & FLAG_DYNAMIC) != 0u && static_flag.w[voxel] != 0u) {
         return;  // the paper hides dynamic geometry inside static voxels
     }
-    imageAtomicRGBA8Avg(CoherentWords(target[WORDS_ALBEDO]), voxel, vec4(base.rgb, 1.0));
-    imageAtomicRGBA8Avg(CoherentWords(target[WORDS_NORMAL]), voxel, vec4(normal * 0.5 + 0.5, 1.0));
+    imageAtomicRGBA8Avg(albedo_grid, voxel, vec4(base.rgb, 1.0));
+    imageAtomicRGBA8Avg(normal_grid, voxel, vec4(normal * 0.5 + 0.5, 1.0));
     if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u) {
-        imageAtomicRGBA8Avg(CoherentWords(target[WORDS_SPREAD]), voxel, vec4(emission, 1.0));
+        imageAtomicRGBA8Avg(emission_grid, voxel, vec4(emission, 1.0));
     }
     if (static_pass && (frame.grid_info.w & FLAG_DYNAMIC) != 0u) {
-        // Atomic: draws write it without barriers between.
-        atomicOr(Words(target[WORDS_EMISSION]).w[voxel], 1u);
+        atomicOr(static_flag.w[voxel], 1u);  // atomic: draws write it without barriers between
     }
 #else
     // Every voxel of this column the triangle's plane crosses within the pixel, clamped to the

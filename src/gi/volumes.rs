@@ -106,7 +106,7 @@ impl VoxelData {
     }
 
     /// The address tables of the static and the dynamic pass (zeros where absent); --paper:
-    /// albedo, normal, emission, flag, in the first.
+    /// albedo, normal, emission, flag in the first (glsl/voxel_common.glsl: PAPER_*).
     fn addresses(&self) -> [[u64; 4]; 2] {
         let or_zero = |b: Option<&Buffer>| b.map_or(0, |b| b.address());
         match self {
@@ -212,7 +212,9 @@ impl Volumes {
         // image set the largest grid. The widest per-voxel volume: the count and albedo sums
         // (ties with the normal and emission sums; twice the radiance's RGBA16F), or for
         // --paper one word (as wide as its RGBA8 radiance).
-        let limit = ctx.max_allocation;
+        // And the shaders index a buffer's words with 32-bit signed integers (SPIR-V access
+        // chains): 2^31 words, 8 GiB, wherever a device allocates more.
+        let limit = ctx.max_allocation.min(1 << 33);
         let (widest, texel) = if settings.paper {
             ("voxel albedo (RGBA8 words)", 4)
         } else {

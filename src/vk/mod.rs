@@ -39,9 +39,9 @@ pub enum VkError {
     #[error("shader {0} is not among the compiled shaders")]
     NoShader(String),
     #[error(
-        "a {grid}^3 grid needs {} MiB for {what}; this device allocates at most {} MiB at once \
-         (maxMemoryAllocationSize) and makes 3D images of at most {max_side} texels a side \
-         (maxImageDimension3D); use --voxels {largest} or less",
+        "a {grid}^3 grid needs {} MiB for {what}; one buffer holds at most {} MiB here \
+         (maxMemoryAllocationSize, and 2^31 words) and a 3D image at most {max_side} texels a \
+         side (maxImageDimension3D); use --voxels {largest} or less",
         bytes >> 20,
         limit >> 20
     )]
