@@ -337,6 +337,25 @@ impl Gi {
     }
 }
 
+/// Texels of `bytes` (RGBA16F when `texel` is 8, R32F when 4) with a non-finite component.
+fn non_finite_texels(bytes: &[u8], texel: u64) -> usize {
+    if texel == 8 {
+        // Four half floats a texel; an exponent of all ones is Inf or NaN.
+        bytes
+            .chunks_exact(8)
+            .filter(|t| {
+                t.chunks_exact(2)
+                    .any(|h| u16::from_le_bytes([h[0], h[1]]) & 0x7c00 == 0x7c00)
+            })
+            .count()
+    } else {
+        bytes
+            .chunks_exact(4)
+            .filter(|f| !f32::from_le_bytes([f[0], f[1], f[2], f[3]]).is_finite())
+            .count()
+    }
+}
+
 /// Non-finite values in the volumes, by kind, from `Gi::count_non_finite`.
 #[derive(Clone, Debug, Default)]
 pub struct NonFinite {
@@ -421,21 +440,7 @@ impl Gi {
             })?;
             let bytes = host.mapped().expect("readback is host-visible");
             let bytes = &bytes[..((side as u64).pow(3) * texel) as usize];
-            let bad = if texel == 8 {
-                // Four half floats a texel; an exponent of all ones is Inf or NaN.
-                bytes
-                    .chunks_exact(8)
-                    .filter(|t| {
-                        t.chunks_exact(2)
-                            .any(|h| u16::from_le_bytes([h[0], h[1]]) & 0x7c00 == 0x7c00)
-                    })
-                    .count()
-            } else {
-                bytes
-                    .chunks_exact(4)
-                    .filter(|f| !f32::from_le_bytes([f[0], f[1], f[2], f[3]]).is_finite())
-                    .count()
-            };
+            let bad = non_finite_texels(bytes, texel);
             match kind {
                 0 => found.radiance += bad,
                 1 => found.directional += bad,
@@ -455,5 +460,27 @@ mod tests {
         assert_eq!(super::f16_to_f32(0x4c40), 17.0);
         assert_eq!(super::f16_to_f32(0xc000), -2.0);
         assert!(super::f16_to_f32(0x7e00).is_nan());
+    }
+
+    #[test]
+    fn non_finite_texels_are_counted_once_each() {
+        // RGBA16F: 1.0 everywhere, then NaN in one channel, +Inf and -Inf in two channels of
+        // another texel, and the largest finite half (exponent 30) in a fourth.
+        let half = |h: [u16; 4]| h.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>();
+        let one = 0x3c00;
+        let texels = [
+            half([one; 4]),
+            half([one, 0x7e00, one, one]),
+            half([0x7c00, one, 0xfc00, one]),
+            half([0x7bff, one, one, one]),
+        ]
+        .concat();
+        assert_eq!(super::non_finite_texels(&texels, 8), 2);
+        // R32F: NaN, Inf, 0, the largest finite float.
+        let floats: Vec<u8> = [f32::NAN, f32::INFINITY, 0.0, f32::MAX]
+            .iter()
+            .flat_map(|f| f.to_le_bytes())
+            .collect();
+        assert_eq!(super::non_finite_texels(&floats, 4), 2);
     }
 }
