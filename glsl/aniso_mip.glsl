@@ -14,8 +14,8 @@
 // How much of the light a voxel or texel sends along `going` (its light direction, shorter
 // where its light spreads) a cone sees when the light must come back against the cone's travel,
 // along `towards`: all of it up to the surface's plane, fading to nothing 30 degrees behind it.
-// The face volumes use it per axis (aniso_mip_base.comp), the cones per sample with their own
-// direction (cone_tracing.glsl).
+// The face volumes use it per axis (aniso_mip_base.comp), the cones' full-resolution samples
+// per voxel with their own direction (cone_tracing.glsl).
 float seen_from(vec3 going, vec3 towards) {
     return clamp(1.0 + 2.0 * dot(going, towards), 0.0, 1.0);
 }

@@ -37,22 +37,23 @@ vec4 sample_directional(vec3 uvw, vec3 dir, float level, vec3 from, bool from_or
     vec4 s = w.x * sx + w.y * sy + w.z * sz;
 #ifndef PAPER
     // Each face volume shows light going at right angles to its axis, so a cone crossing a
-    // surface's plane from behind would see it through the volumes of the other axes: seen
-    // from behind where its light goes, a texel's light is hidden.
-    vec4 going = textureLod(light_dir, uvw, level);
-    vec3 g = going.w > 0.0 ? going.xyz / going.w : vec3(0.0);
-    float shown = seen_from(g, -dir);
-    if (going.w > 0.0 && from_origin) {
-        // And its light reaches the cone's origin only if that lies in front of the plane the
-        // light leaves (light_pos: the voxels' surfaces, light-weighted): a cone running beside
-        // a thin wall, on its dark side, reads texels that hold the wall's lit face, whose
-        // light goes at right angles to the cone. Hidden once the origin is a quarter of a
-        // texel (of 2^(level + 1) voxels) behind that plane.
-        vec3 lies = textureLod(light_pos, uvw, level).xyz / going.w;
-        float quarter_texel = exp2(level - 1.0) / float(grid_n());
-        shown *= clamp(1.0 + dot(from - lies, g) / quarter_texel, 0.0, 1.0);
+    // surface's plane from behind would see it through the volumes of the other axes, and a
+    // cone running beside a thin wall, on its dark side, reads texels that hold the wall's lit
+    // face: a texel's light reaches the cone only if its origin lies in front of the plane the
+    // light leaves (light_dir: where the texel's light goes, light_pos: where its surfaces lie,
+    // both light-weighted). Hidden once the origin is a quarter of a texel (of 2^(level + 1)
+    // voxels) behind that plane. (The face volumes already hide each voxel's light from cones
+    // it goes away from; a test of the texel's mean light direction against the cone's hid
+    // part of every surface's light in a texel that holds several, such as a room's corner.)
+    if (from_origin) {
+        vec4 going = textureLod(light_dir, uvw, level);
+        if (going.w > 0.0) {
+            vec3 g = going.xyz / going.w;
+            vec3 lies = textureLod(light_pos, uvw, level).xyz / going.w;
+            float quarter_texel = exp2(level - 1.0) / float(grid_n());
+            s.rgb *= clamp(1.0 + dot(from - lies, g) / quarter_texel, 0.0, 1.0);
+        }
     }
-    s.rgb *= shown;
 #endif
     return s;
 }

@@ -49,12 +49,12 @@ const MEETS_GOAL: &[&str] = &[
     "empty-scene",
     "single-triangle",
     "no-light",
+    "furnace",
 ];
 
 /// Open cases that come within 1.5 times their goal: they must stay there. At 48x48 against
-/// 256 spp references: the furnace 0.056 (goal 0.05). (emissive-1e4, 0.071 against 0.075,
-/// is held only to beat --paper.)
-const NEAR_GOAL: &[&str] = &["furnace"];
+/// 256 spp references: emissive-1e4 0.070 (goal 0.05).
+const NEAR_GOAL: &[&str] = &["emissive-1e4"];
 
 /// One validated context for all cases: lavapipe's instance creation is slow and the cases run
 /// one at a time anyway (each renders at 48x48 and path-traces a reference on both cores).
