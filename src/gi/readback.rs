@@ -70,6 +70,41 @@ fn words(bytes: &[u8]) -> Vec<u32> {
         .collect()
 }
 
+/// Records the copy of one mip level (a cube of `side` texels) of a 3D image, in
+/// TRANSFER_SRC_OPTIMAL, to `host` at `offset`.
+///
+/// # Safety
+/// `cmd` is recording.
+unsafe fn copy_level(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    img: &Image,
+    level: u32,
+    side: u32,
+    host: &Buffer,
+    offset: u64,
+) {
+    ctx.device.cmd_copy_image_to_buffer(
+        cmd,
+        img.raw,
+        vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+        host.raw,
+        &[vk::BufferImageCopy::default()
+            .buffer_offset(offset)
+            .image_subresource(vk::ImageSubresourceLayers {
+                aspect_mask: vk::ImageAspectFlags::COLOR,
+                mip_level: level,
+                base_array_layer: 0,
+                layer_count: 1,
+            })
+            .image_extent(vk::Extent3D {
+                width: side,
+                height: side,
+                depth: side,
+            })],
+    )
+}
+
 impl Gi {
     /// Copies the volumes to host memory and decodes them. Waits for the GPU.
     pub fn read_voxels(
@@ -187,25 +222,9 @@ impl Gi {
                                 size: *size,
                             }],
                         ),
-                        Src::Img(i, _, level, side) => ctx.device.cmd_copy_image_to_buffer(
-                            cmd,
-                            i.raw,
-                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                            host.raw,
-                            &[vk::BufferImageCopy::default()
-                                .buffer_offset(offset)
-                                .image_subresource(vk::ImageSubresourceLayers {
-                                    aspect_mask: vk::ImageAspectFlags::COLOR,
-                                    mip_level: *level,
-                                    base_array_layer: 0,
-                                    layer_count: 1,
-                                })
-                                .image_extent(vk::Extent3D {
-                                    width: *side,
-                                    height: *side,
-                                    depth: *side,
-                                })],
-                        ),
+                        Src::Img(i, _, level, side) => {
+                            copy_level(ctx, cmd, i, *level, *side, &host, offset)
+                        }
                     }
                 }
             });
@@ -413,26 +432,7 @@ impl Gi {
                     .buffer(&host, Access::TransferWrite)
                     .image(img, Access::TransferRead)
                     .untimed()
-                    .record(|cmd| unsafe {
-                        ctx.device.cmd_copy_image_to_buffer(
-                            cmd,
-                            img.raw,
-                            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
-                            host.raw,
-                            &[vk::BufferImageCopy::default()
-                                .image_subresource(vk::ImageSubresourceLayers {
-                                    aspect_mask: vk::ImageAspectFlags::COLOR,
-                                    mip_level: level,
-                                    base_array_layer: 0,
-                                    layer_count: 1,
-                                })
-                                .image_extent(vk::Extent3D {
-                                    width: side,
-                                    height: side,
-                                    depth: side,
-                                })],
-                        )
-                    });
+                    .record(|cmd| unsafe { copy_level(ctx, cmd, img, level, side, &host, 0) });
                 g.pass("non-finite readback to host")
                     .buffer(&host, Access::HostRead)
                     .untimed()
