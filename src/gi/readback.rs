@@ -105,7 +105,70 @@ unsafe fn copy_level(
     )
 }
 
+/// Which lit volume a level belongs to.
+enum Lit {
+    Radiance,
+    /// In the order of `Volumes::directional`.
+    Directional(usize),
+    SmallEmission,
+}
+
+/// One mip level of a lit volume, as the readbacks copy it.
+struct LitLevel<'a> {
+    img: &'a Image,
+    /// Bytes a texel.
+    texel: u64,
+    level: u32,
+    side: u32,
+    kind: Lit,
+}
+
 impl Gi {
+    /// The lit volumes' levels, none before the voxels are lit: the radiance, then (not for
+    /// --paper, whose directional volumes are RGBA8) every level of the directional volumes
+    /// and of those beside them, and the small emitters' volume when the scene emits (without
+    /// emitters it is a one-texel stand-in).
+    fn lit_levels(&self) -> Vec<LitLevel<'_>> {
+        let mut levels = Vec::new();
+        if self.lighting.is_none() {
+            return levels;
+        }
+        let n = self.volumes.grid.resolution;
+        let texel = if self.settings.paper { 4 } else { 8 };
+        levels.push(LitLevel {
+            img: &self.volumes.radiance,
+            texel,
+            level: 0,
+            side: n,
+            kind: Lit::Radiance,
+        });
+        if self.settings.paper {
+            return levels;
+        }
+        for (i, img) in self.volumes.directional().enumerate() {
+            let side = img.desc.extent.width;
+            for level in 0..img.desc.mip_levels {
+                levels.push(LitLevel {
+                    img,
+                    texel: 8,
+                    level,
+                    side: (side >> level).max(1),
+                    kind: Lit::Directional(i),
+                });
+            }
+        }
+        if let (Some(small), true) = (&self.volumes.small_emission, self.emissive) {
+            levels.push(LitLevel {
+                img: small,
+                texel: 4,
+                level: 0,
+                side: n,
+                kind: Lit::SmallEmission,
+            });
+        }
+        levels
+    }
+
     /// Copies the volumes to host memory and decodes them. Waits for the GPU.
     pub fn read_voxels(
         &self,
@@ -154,24 +217,17 @@ impl Gi {
                 }
             }
         }
-        if self.lighting.is_some() {
-            let texel = if self.settings.paper { 4 } else { 8 };
-            sources.push(("r".into(), Src::Img(&self.volumes.radiance, texel, 0, n)));
-            // The paper's directional volumes are RGBA8: nothing in them can be non-finite.
-            if !self.settings.paper {
-                for (i, img) in self.volumes.directional().enumerate() {
-                    let side = img.desc.extent.width;
-                    for level in 0..img.desc.mip_levels {
-                        let name = format!("directional {i} level {level}");
-                        directional_names.push(name.clone());
-                        sources.push((name, Src::Img(img, 8, level, (side >> level).max(1))));
-                    }
+        for l in self.lit_levels() {
+            let name = match l.kind {
+                Lit::Radiance => "r".to_string(),
+                Lit::Directional(i) => {
+                    let name = format!("directional {i} level {}", l.level);
+                    directional_names.push(name.clone());
+                    name
                 }
-                // Without emitters the volume is a one-texel stand-in.
-                if let (Some(small), true) = (&self.volumes.small_emission, self.emissive) {
-                    sources.push(("small".into(), Src::Img(small, 4, 0, n)));
-                }
-            }
+                Lit::SmallEmission => "small".to_string(),
+            };
+            sources.push((name, Src::Img(l.img, l.texel, l.level, l.side)));
         }
         let sizes: Vec<u64> = sources
             .iter()
@@ -400,22 +456,10 @@ impl Gi {
         if self.lighting.is_none() || self.settings.paper {
             return Ok(found);
         }
-        let n = self.volumes.grid.resolution;
-        // (image, bytes a texel, level, side, which count)
-        let mut levels: Vec<(&Image, u64, u32, u32, u8)> =
-            vec![(&self.volumes.radiance, 8, 0, n, 0)];
-        for img in self.volumes.directional() {
-            let side = img.desc.extent.width;
-            for level in 0..img.desc.mip_levels {
-                levels.push((img, 8, level, (side >> level).max(1), 1));
-            }
-        }
-        if let (Some(small), true) = (&self.volumes.small_emission, self.emissive) {
-            levels.push((small, 4, 0, n, 2));
-        }
+        let levels = self.lit_levels();
         let largest = levels
             .iter()
-            .map(|&(_, t, _, side, _)| (side as u64).pow(3) * t)
+            .map(|l| (l.side as u64).pow(3) * l.texel)
             .max()
             .unwrap_or(4);
         let host = Buffer::new(
@@ -425,7 +469,8 @@ impl Gi {
             vk::BufferUsageFlags::TRANSFER_DST,
             MemoryLocation::GpuToCpu,
         )?;
-        for (img, texel, level, side, kind) in levels {
+        for l in levels {
+            let (img, level, side) = (l.img, l.level, l.side);
             ctx.one_shot(|cmd| {
                 let mut g = Graph::new(ctx, cmd, states, None);
                 g.pass("non-finite readback")
@@ -439,12 +484,12 @@ impl Gi {
                     .record(|_| {});
             })?;
             let bytes = host.mapped().expect("readback is host-visible");
-            let bytes = &bytes[..((side as u64).pow(3) * texel) as usize];
-            let bad = non_finite_texels(bytes, texel);
-            match kind {
-                0 => found.radiance += bad,
-                1 => found.directional += bad,
-                _ => found.small_emission += bad,
+            let bytes = &bytes[..((side as u64).pow(3) * l.texel) as usize];
+            let bad = non_finite_texels(bytes, l.texel);
+            match l.kind {
+                Lit::Radiance => found.radiance += bad,
+                Lit::Directional(_) => found.directional += bad,
+                Lit::SmallEmission => found.small_emission += bad,
             }
         }
         states.forget(host.raw);
