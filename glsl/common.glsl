@@ -8,6 +8,8 @@ const float PI = 3.14159265358979;
 const uint LIGHT_DIRECTIONAL = 0u;
 const uint LIGHT_POINT = 1u;
 const uint LIGHT_SPOT = 2u;
+// An emitter smaller than a voxel, injected as a light (src/render/emitter_lights.rs).
+const uint LIGHT_EMITTER = 3u;
 
 layout(set = 0, binding = 0, std140) uniform Frame {
     mat4 view_proj;
@@ -45,8 +47,10 @@ layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materi
 struct Light {
     vec4 position_type;   // xyz position, w type
     vec4 direction_range; // xyz direction the light shines along, w range (0: none)
-    vec4 radiance;        // rgb: W/sr (point, spot) or W/m^2 (directional)
+    vec4 radiance;        // rgb: W/sr (point, spot), W/m^2 (directional), Le (emitter;
+                          // w 1 when two-sided)
     vec4 cone;            // x angle scale, y angle offset (glTF), z first shadow view, w view count
+                          // (emitter: x lobe area, y uniform area)
 };
 layout(set = 0, binding = 3, std430) readonly buffer Lights { Light lights[]; };
 

@@ -14,6 +14,14 @@ vec3 light_irradiance(Light light, vec3 p, out vec3 to_light, out float dist) {
     float d2 = max(dot(d, d), 1e-12);
     dist = sqrt(d2);
     to_light = d / dist;
+    if (type == LIGHT_EMITTER) {
+        // Intensity Le (lobe cos + uniform), cone.x and cone.y in square metres; |cos| when
+        // two-sided. Never more than pi Le, the irradiance under an emitter that fills the
+        // sky, which a point closer than the emitter's size would exceed.
+        float c = dot(light.direction_range.xyz, -to_light);
+        float lobe = light.radiance.w > 0.5 ? abs(c) : max(c, 0.0);
+        return light.radiance.rgb * min((light.cone.x * lobe + light.cone.y) / d2, PI);
+    }
     float atten = 1.0 / d2;
     float range = light.direction_range.w;
     if (range > 0.0) {

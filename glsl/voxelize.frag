@@ -12,7 +12,8 @@
 layout(push_constant) uniform Draw {
     mat4 model;
     uint material;
-    uint flags;   // bit 0: mirrored transform; bit 1: static pass (PAPER: writes the flag)
+    uint flags;   // bit 0: mirrored transform; bit 1: static pass (PAPER: writes the flag);
+                  // bit 2: the emitter is a light (src/render/emitter_lights.rs)
 } draw;
 
 layout(location = 0) in vec3 g_normal;
@@ -85,6 +86,8 @@ void main() {
     vec4 base = m.base_color * texture(t_base_color, g_uv);
     if (m.params.w >= 0.0 && base.a < m.params.w) discard;
     vec3 emission = m.emissive.rgb * texture(t_emissive, g_uv).rgb;
+    // An emitter injected as a light lights the voxels through it, not as emission.
+    if ((draw.flags & 4u) != 0u) emission = vec3(0.0);
     float nl = length(g_normal);
     vec3 normal = nl > 1e-8 ? g_normal / nl : vec3(0.0);
 

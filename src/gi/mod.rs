@@ -24,7 +24,7 @@ pub use bounce::Bounce;
 pub use inject::Inject;
 pub use mip::Mip;
 pub use trace::{Trace, TraceMode};
-pub use voxelize::Voxelizer;
+pub use voxelize::{Voxelizer, EMITTER_LIGHT};
 
 /// The most light bounces `GiSettings::bounces` may ask for.
 pub const MAX_BOUNCES: u32 = 8;
@@ -61,6 +61,9 @@ pub struct GiSettings {
     /// the voxels' mean albedo times their closed share, at most 0.6 (glsl/bounce_tail.comp).
     /// Needs `bounces` >= 2; not for `paper`.
     pub tail: bool,
+    /// Emitters smaller than a voxel light the scene as point lights with shadow maps
+    /// (src/render/emitter_lights.rs) instead of as voxel emission. Not for `paper`.
+    pub emitter_lights: bool,
 }
 
 impl Default for GiSettings {
@@ -92,6 +95,10 @@ impl Default for GiSettings {
             // The closed rooms of docs/hard-cases.md lose a tenth of their light and more
             // without the third and later bounces; tracing them costs a bounce pass each.
             tail: true,
+            // A voxel's one radiance spreads a small emitter's light over what its coarse
+            // texels reach; as a light it falls where the emitter faces
+            // (docs/hard-cases.md, emissive-1e4).
+            emitter_lights: true,
         }
     }
 }
@@ -110,6 +117,7 @@ impl GiSettings {
             max_distance: 0.95,
             start_offset: 2.0,
             tail: false,
+            emitter_lights: false,
             ..Default::default()
         }
     }
@@ -335,6 +343,8 @@ pub struct GiInputs<'a> {
     pub shadow_map: (vk::ImageView, vk::Sampler),
     pub gbuffer: Vec<(vk::ImageView, vk::Sampler)>,
     pub out: &'a Image,
+    /// The emitters injected as lights (their instances' emission stays out of the voxels).
+    pub emitter_lights: &'a [crate::render::emitter_lights::EmitterLight],
 }
 
 impl Gi {
@@ -347,9 +357,14 @@ impl Gi {
         inputs: GiInputs,
     ) -> VkResult<Gi> {
         let grid = VoxelGrid::fit(&scene.bounds, settings.voxels);
+        // The emission the voxels hold: every emissive instance's but the lights'.
         let max_emission = scene
-            .materials
+            .instances
             .iter()
+            .enumerate()
+            .filter(|(i, _)| !inputs.emitter_lights.iter().any(|e| e.instance == *i))
+            .filter_map(|(_, inst)| scene.primitives.get(inst.primitive as usize))
+            .filter_map(|p| scene.materials.get(p.material as usize))
             .map(|m| m.emissive.max_element())
             .fold(0.0f32, f32::max);
         let emissive = max_emission > 0.0;
@@ -431,7 +446,14 @@ impl Gi {
             radiance_scale: if paper {
                 1.0
             } else {
-                radiance_scale(scene, grid.voxel_size(), max_emission)
+                // The emitters' lights as bright as their emission at most: a face no larger
+                // than the voxel, one voxel away.
+                let lights = inputs
+                    .emitter_lights
+                    .iter()
+                    .map(|e| e.emission.max_element())
+                    .fold(max_emission, f32::max);
+                radiance_scale(scene, grid.voxel_size(), lights)
             },
             static_dirty: true,
             dynamic_dirty: true,

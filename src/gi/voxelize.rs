@@ -11,6 +11,8 @@ use std::sync::Arc;
 
 /// Push-constant flag: the static pass (the paper's pass writes its flag volume then).
 pub const STATIC_PASS: u32 = 2;
+/// Push-constant flag: the draw's emission is injected as a light (no voxel emission).
+pub const EMITTER_LIGHT: u32 = 4;
 
 pub struct Voxelizer {
     pub pipeline: Pipeline,

@@ -81,6 +81,8 @@ impl GpuMaterial {
 pub const LIGHT_DIRECTIONAL: f32 = 0.0;
 pub const LIGHT_POINT: f32 = 1.0;
 pub const LIGHT_SPOT: f32 = 2.0;
+/// An emitter smaller than a voxel (render/emitter_lights.rs).
+pub const LIGHT_EMITTER: f32 = 3.0;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
@@ -88,7 +90,8 @@ pub struct GpuLight {
     pub position_type: Vec4,
     pub direction_range: Vec4,
     pub radiance: Vec4,
-    /// angle scale, angle offset, first shadow view, shadow view count
+    /// angle scale, angle offset, first shadow view, shadow view count; for an emitter
+    /// (radiance.w 1 when two-sided): lobe area, uniform area, first view, view count
     pub cone: Vec4,
 }
 
@@ -112,6 +115,19 @@ impl GpuLight {
             direction_range: l.direction.extend(l.range.unwrap_or(0.0)),
             radiance: l.radiance.extend(0.0),
             cone: Vec4::new(scale, offset, first_view as f32, views as f32),
+        }
+    }
+
+    pub fn from_emitter(
+        e: &super::emitter_lights::EmitterLight,
+        first_view: u32,
+        views: u32,
+    ) -> Self {
+        GpuLight {
+            position_type: e.position.extend(LIGHT_EMITTER),
+            direction_range: e.axis.extend(0.0),
+            radiance: e.emission.extend(if e.two_sided { 1.0 } else { 0.0 }),
+            cone: Vec4::new(e.lobe, e.uniform, first_view as f32, views as f32),
         }
     }
 }

@@ -1,9 +1,10 @@
 //! The scene on the GPU: geometry, materials, textures with mip chains, lights and their
 //! shadow views. Uploaded once through a staging buffer.
 
+use super::emitter_lights::EmitterLight;
 use super::gpu::{as_bytes, GpuLight, GpuMaterial, ShadowView};
 use super::shadows::{light_views, LightViews};
-use crate::scene::{Scene, Texture, Wrap};
+use crate::scene::{Aabb, Light, Scene, Texture, Wrap};
 use crate::vk::{
     vk, Access, Buffer, Context, Graph, Image, ImageDesc, ResourceStates, Sampler, VkResult,
 };
@@ -23,6 +24,33 @@ pub struct GpuScene {
     pub samplers: Vec<Sampler>,
     pub light_views: Vec<LightViews>,
     pub shadow_view_count: u32,
+}
+
+/// The lights as the shaders read them, and their shadow views: the scene's lights in order,
+/// then the emitters injected as lights (each a point light's six views).
+pub fn light_table(
+    lights: &[Light],
+    emitters: &[EmitterLight],
+    bounds: &Aabb,
+    shadow_resolution: u32,
+    pcf_radius: u32,
+) -> (Vec<LightViews>, Vec<GpuLight>) {
+    let points: Vec<Light> = emitters.iter().map(EmitterLight::as_point_light).collect();
+    let all: Vec<Light> = lights.iter().chain(&points).cloned().collect();
+    let views = light_views(&all, bounds, shadow_resolution, pcf_radius);
+    let (user_views, emitter_views) = views.split_at(lights.len());
+    let gpu = lights
+        .iter()
+        .zip(user_views)
+        .map(|(l, v)| GpuLight::from_light(l, v.first, v.views.len() as u32))
+        .chain(
+            emitters
+                .iter()
+                .zip(emitter_views)
+                .map(|(e, v)| GpuLight::from_emitter(e, v.first, v.views.len() as u32)),
+        )
+        .collect();
+    (views, gpu)
 }
 
 impl GpuScene {
@@ -110,6 +138,7 @@ impl GpuScene {
         ctx: &Arc<Context>,
         scene: &Scene,
         states: &mut ResourceStates,
+        emitters: &[EmitterLight],
         shadow_resolution: u32,
         pcf_radius: u32,
     ) -> VkResult<GpuScene> {
@@ -160,13 +189,13 @@ impl GpuScene {
             vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
 
-        let views = light_views(&scene.lights, &scene.bounds, shadow_resolution, pcf_radius);
-        let mut gpu_lights: Vec<GpuLight> = scene
-            .lights
-            .iter()
-            .zip(&views)
-            .map(|(l, v)| GpuLight::from_light(l, v.first, v.views.len() as u32))
-            .collect();
+        let (views, mut gpu_lights) = light_table(
+            &scene.lights,
+            emitters,
+            &scene.bounds,
+            shadow_resolution,
+            pcf_radius,
+        );
         if gpu_lights.is_empty() {
             gpu_lights.push(GpuLight::default());
         }

@@ -1,5 +1,6 @@
 //! The renderer: shadow maps, G-buffer and deferred lighting, recorded as declared passes.
 
+pub mod emitter_lights;
 pub mod gpu;
 mod gpu_scene;
 pub(crate) mod pipelines;

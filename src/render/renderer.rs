@@ -1,5 +1,6 @@
 use super::gpu::{as_bytes, FrameUniforms};
-use super::gpu_scene::GpuScene;
+use super::emitter_lights::{self, EmitterLight};
+use super::gpu_scene::{light_table, GpuScene};
 use super::pipelines::{self, Desc, DescriptorPool, GraphicsDesc, Pipeline, SetLayout, Spec};
 use crate::gi::{Gi, GiInputs, GiSettings, TraceMode};
 use crate::scene::{Camera, Material, Scene, TexRef};
@@ -224,7 +225,12 @@ pub struct Renderer {
     cmd: vk::CommandBuffer,
     /// Test hook: record this pass without its barriers.
     pub omit_barriers_of: Option<String>,
-    light_count: u32,
+    /// The scene's lights (set_lights replaces them).
+    lights: Vec<crate::scene::Light>,
+    /// Emitters smaller than a voxel, lit as lights after the scene's (emitter_lights.rs).
+    emitters: Vec<EmitterLight>,
+    /// Per instance: the emitter light it is, if any.
+    emitter_of: Vec<Option<usize>>,
     /// Per shadow view: it must be drawn (first frame, its light moved, or a node moved
     /// through its frustum).
     shadow_views_dirty: Vec<bool>,
@@ -247,10 +253,25 @@ pub struct Renderer {
 impl Renderer {
     pub fn new(ctx: &Arc<Context>, scene: &Scene, settings: RenderSettings) -> VkResult<Renderer> {
         let mut states = ResourceStates::default();
+        let gi_settings = &settings.gi;
+        let emitters = if settings.mode.uses_voxels()
+            && gi_settings.emitter_lights
+            && !gi_settings.paper
+        {
+            let grid = crate::gi::VoxelGrid::fit(&scene.bounds, gi_settings.voxels);
+            emitter_lights::find(scene, grid.voxel_size())
+        } else {
+            Vec::new()
+        };
+        let mut emitter_of = vec![None; scene.instances.len()];
+        for (k, e) in emitters.iter().enumerate() {
+            emitter_of[e.instance] = Some(k);
+        }
         let gpu = GpuScene::upload(
             ctx,
             scene,
             &mut states,
+            &emitters,
             settings.shadow_resolution,
             settings.pcf_radius,
         )?;
@@ -554,6 +575,7 @@ impl Renderer {
                     shadow_map: (shadow_map.view, shadow_sampler.raw),
                     gbuffer: gbuffer_views,
                     out: &hdr,
+                    emitter_lights: &emitters,
                 },
             )?)
         } else {
@@ -575,7 +597,9 @@ impl Renderer {
                     (p.first_index, p.index_count, p.material)
                 })
                 .collect(),
-            light_count: scene.lights.len() as u32,
+            lights: scene.lights.clone(),
+            emitters,
+            emitter_of,
             bounds: scene.bounds,
             shadow_views_dirty: vec![true; gpu.shadow_view_count as usize],
             instance_bounds: scene
@@ -631,7 +655,12 @@ impl Renderer {
             view,
             proj,
             eye: self.camera.eye().extend(1.0),
-            counts: [self.light_count, w, h, self.gpu.shadow_view_count],
+            counts: [
+                (self.lights.len() + self.emitters.len()) as u32,
+                w,
+                h,
+                self.gpu.shadow_view_count,
+            ],
             shadow: Vec4::new(
                 self.settings.shadow_resolution as f32,
                 self.settings.normal_offset,
@@ -819,7 +848,14 @@ impl Renderer {
                         .depth_attachment(&depth);
                     unsafe { d.cmd_begin_rendering(cmd, &info) };
                     pipelines::set_viewport(ctx, cmd, res, res);
-                    self.draw_instances(cmd, &self.shadow_pipeline, |_| view, |_| true);
+                    // An emitter light's own faces would hide it (its centre may be inside).
+                    let own = |i: usize| {
+                        self.emitter_of[i].is_some_and(|k| {
+                            let v = &self.gpu.light_views[self.lights.len() + k];
+                            (v.first..v.first + v.views.len() as u32).contains(&view)
+                        })
+                    };
+                    self.draw_instances(cmd, &self.shadow_pipeline, |_| view, |i| !own(i));
                     unsafe { d.cmd_end_rendering(cmd) };
                 }
             });
@@ -832,7 +868,10 @@ impl Renderer {
                     self.draw_instances(
                         cmd,
                         p,
-                        |i| self.mirrored(i) | flags,
+                        |i| {
+                            let light = self.emitter_of[i].map_or(0, |_| crate::gi::EMITTER_LIGHT);
+                            self.mirrored(i) | flags | light
+                        },
                         |i| self.dynamic_instances[i] == dynamic,
                     )
                 }
@@ -1014,6 +1053,45 @@ impl Renderer {
             gi.static_dirty |= moved_static;
             gi.dynamic_dirty |= moved_dynamic;
         }
+        // An emitter light goes with its faces: its views draw again and the voxels are lit
+        // again.
+        let mut moved_light = false;
+        for k in 0..self.emitters.len() {
+            let i = self.emitters[k].instance;
+            if self.instance_nodes[i] == node {
+                self.emitters[k].place(&world);
+                let v = &self.gpu.light_views[self.lights.len() + k];
+                let views = v.first as usize..v.first as usize + v.views.len();
+                self.shadow_views_dirty[views].fill(true);
+                moved_light = true;
+            }
+        }
+        if moved_light {
+            self.write_lights();
+            if let Some(gi) = self.gi.as_mut() {
+                gi.lights_dirty = true;
+            }
+        }
+    }
+
+    /// Writes the lights and their shadow views (the scene's and the emitters') for the next
+    /// frame; the previous frame was waited for, so nothing on the GPU reads them now.
+    fn write_lights(&mut self) {
+        let (views, gpu_lights) = light_table(
+            &self.lights,
+            &self.emitters,
+            &self.bounds,
+            self.settings.shadow_resolution,
+            self.settings.pcf_radius,
+        );
+        let all_views: Vec<_> = views.iter().flat_map(|v| v.views.iter().copied()).collect();
+        if !gpu_lights.is_empty() {
+            self.gpu.lights.write(0, as_bytes(&gpu_lights));
+        }
+        if !all_views.is_empty() {
+            self.gpu.shadow_views.write(0, as_bytes(&all_views));
+        }
+        self.gpu.light_views = views;
     }
 
     /// A new frame size: the G-buffer, radiance and readback images are made again at the
@@ -1052,7 +1130,6 @@ impl Renderer {
     /// shadow views keep their number): the next frame draws their shadow maps and lights the
     /// voxels with them.
     pub fn set_lights(&mut self, lights: &[crate::scene::Light]) -> VkResult<()> {
-        use super::gpu::GpuLight;
         use super::shadows::light_views;
         let views = light_views(
             lights,
@@ -1061,26 +1138,17 @@ impl Renderer {
             self.settings.pcf_radius,
         );
         let counts: Vec<usize> = views.iter().map(|v| v.views.len()).collect();
-        let before: Vec<usize> = self.gpu.light_views.iter().map(|v| v.views.len()).collect();
-        if lights.len() as u32 != self.light_count || counts != before {
+        let before: Vec<usize> = self.gpu.light_views[..self.lights.len()]
+            .iter()
+            .map(|v| v.views.len())
+            .collect();
+        if lights.len() != self.lights.len() || counts != before {
             return Err(VkError::Request(
                 "set_lights: the lights must keep their number and kinds".into(),
             ));
         }
-        let gpu_lights: Vec<GpuLight> = lights
-            .iter()
-            .zip(&views)
-            .map(|(l, v)| GpuLight::from_light(l, v.first, v.views.len() as u32))
-            .collect();
-        let all_views: Vec<_> = views.iter().flat_map(|v| v.views.iter().copied()).collect();
-        // The previous frame was waited for: nothing on the GPU reads these now.
-        if !gpu_lights.is_empty() {
-            self.gpu.lights.write(0, as_bytes(&gpu_lights));
-        }
-        if !all_views.is_empty() {
-            self.gpu.shadow_views.write(0, as_bytes(&all_views));
-        }
-        self.gpu.light_views = views;
+        self.lights = lights.to_vec();
+        self.write_lights();
         self.relight();
         Ok(())
     }
