@@ -54,7 +54,11 @@ impl EmitterLight {
             let (a_i, n) = (0.5 * twice, cross / twice);
             // Two-sided faces count along one common side.
             let r = *reference.get_or_insert(n);
-            let n = if self.two_sided && n.dot(r) < 0.0 { -n } else { n };
+            let n = if self.two_sided && n.dot(r) < 0.0 {
+                -n
+            } else {
+                n
+            };
             area += a_i;
             centre += a_i * (a + b + c) / 3.0;
             sum += a_i * n;

@@ -1,5 +1,5 @@
-use super::gpu::{as_bytes, FrameUniforms};
 use super::emitter_lights::{self, EmitterLight};
+use super::gpu::{as_bytes, FrameUniforms};
 use super::gpu_scene::{light_table, GpuScene};
 use super::pipelines::{self, Desc, DescriptorPool, GraphicsDesc, Pipeline, SetLayout, Spec};
 use crate::gi::{Gi, GiInputs, GiSettings, TraceMode};
@@ -254,15 +254,13 @@ impl Renderer {
     pub fn new(ctx: &Arc<Context>, scene: &Scene, settings: RenderSettings) -> VkResult<Renderer> {
         let mut states = ResourceStates::default();
         let gi_settings = &settings.gi;
-        let emitters = if settings.mode.uses_voxels()
-            && gi_settings.emitter_lights
-            && !gi_settings.paper
-        {
-            let grid = crate::gi::VoxelGrid::fit(&scene.bounds, gi_settings.voxels);
-            emitter_lights::find(scene, grid.voxel_size())
-        } else {
-            Vec::new()
-        };
+        let emitters =
+            if settings.mode.uses_voxels() && gi_settings.emitter_lights && !gi_settings.paper {
+                let grid = crate::gi::VoxelGrid::fit(&scene.bounds, gi_settings.voxels);
+                emitter_lights::find(scene, grid.voxel_size())
+            } else {
+                Vec::new()
+            };
         let mut emitter_of = vec![None; scene.instances.len()];
         for (k, e) in emitters.iter().enumerate() {
             emitter_of[e.instance] = Some(k);
