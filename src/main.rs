@@ -16,6 +16,7 @@ USAGE:
   voxgi render [SCENE] [--out FILE] [--width W] [--height H] [--mode MODE] [--mip L]
                [--voxels N] [--bounces N] [--paper] [--cones N] [--aperture DEG]
                [--step F] [--voxel-shadows] [--cone-shadows] [--no-tail]
+               [--no-emitter-lights]
                [--frames N] [--exposure EV] [--shadow-res N] [--sun EL,AZ[,E]]
                [--spin NODE [--spin-speed DEG]] [--time T]
                [--validate] [--timings] [--device NAME]
@@ -52,6 +53,8 @@ USAGE:
   --no-tail    the last bounce does not add the bounces after it (by default it adds them as
                a geometric series: the voxels' mean albedo times their closed share, at most
                0.6, is each further bounce's share of the one before)
+  --no-emitter-lights     emitters smaller than a voxel stay voxel emission (by default up
+               to four, the most powerful, light the scene as point lights with shadow maps)
   --frames N   frames to render (timings are medians over them; default 1, 5 with --timings)
   --exposure EV           display exposure for .png, in stops (default 0)
   --shadow-res N          shadow-map texels per side (default 2048)
@@ -100,7 +103,8 @@ USAGE:
                also with the paper's settings, cones 1..16, aperture 30..90, step 0.25..1,
                bounces 1,2), tiny (32^3: default and paper). Axes: voxels, bounces, paper,
                cones, aperture, step, max-distance, start-offset, ao-falloff, voxel-shadows,
-               cone-shadows, lod-offset, tail. Example: --sweep 'voxels=32,64;cones=4,6;paper=0,1'
+               cone-shadows, lod-offset, tail, emitter-lights.
+               Example: --sweep 'voxels=32,64;cones=4,6;paper=0,1'
 ";
 
 /// The Cornell box generated into assets/ (see voxgi::scene::builder).
@@ -121,6 +125,7 @@ const FLAGS: &[&str] = &[
     "--voxel-shadows",
     "--cone-shadows",
     "--no-tail",
+    "--no-emitter-lights",
     "--no-vsync",
     "--ideal",
 ];
@@ -337,6 +342,9 @@ fn gi_settings(args: &Args) -> Result<GiSettings> {
     gi.cone_shadows = args.flag("--cone-shadows");
     if args.flag("--no-tail") {
         gi.tail = false;
+    }
+    if args.flag("--no-emitter-lights") {
+        gi.emitter_lights = false;
     }
     Ok(gi)
 }
@@ -620,6 +628,16 @@ fn info(args: &Args) -> Result<()> {
             } else {
                 "default"
             }
+        );
+    }
+    for e in renderer.emitter_lights() {
+        let inst = &scene.instances[e.instance];
+        println!(
+            "emitter    instance {} ({}) as a light at {:?}: {:.4} W, smaller than a voxel",
+            e.instance,
+            inst.node_name.as_deref().unwrap_or("unnamed node"),
+            e.position.to_array(),
+            e.power().max_element(),
         );
     }
     let mut report = ctx.allocator().generate_report().allocations;

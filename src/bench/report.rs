@@ -101,6 +101,7 @@ fn gi_fields(r: &Row) -> Vec<(&'static str, String)> {
         ("cone_shadows", g.cone_shadows.to_string()),
         ("lod_offset", g.lod_offset.to_string()),
         ("tail", g.tail.to_string()),
+        ("emitter_lights", g.emitter_lights.to_string()),
     ]
 }
 

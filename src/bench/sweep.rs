@@ -102,6 +102,11 @@ pub fn label(gi: &GiSettings) -> String {
         gi.lod_offset.to_string(),
     );
     add("tail", gi.tail != b.tail, flag(gi.tail));
+    add(
+        "emitter-lights",
+        gi.emitter_lights != b.emitter_lights,
+        flag(gi.emitter_lights),
+    );
     s
 }
 
@@ -207,6 +212,9 @@ const AXES: &[(&str, f64, f64, bool, Apply)] = &[
         g.lod_offset = v as f32
     }),
     ("tail", 0.0, 1.0, true, |g, v| g.tail = v != 0.0),
+    ("emitter-lights", 0.0, 1.0, true, |g, v| {
+        g.emitter_lights = v != 0.0
+    }),
 ];
 
 fn parse_value(axis: &str, text: &str, min: f64, max: f64, integer: bool) -> Result<f64, String> {

@@ -1072,6 +1072,11 @@ impl Renderer {
         }
     }
 
+    /// The emitters smaller than a voxel that light the scene as lights.
+    pub fn emitter_lights(&self) -> &[EmitterLight] {
+        &self.emitters
+    }
+
     /// Writes the lights and their shadow views (the scene's and the emitters') for the next
     /// frame; the previous frame was waited for, so nothing on the GPU reads them now.
     fn write_lights(&mut self) {
