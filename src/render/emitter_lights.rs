@@ -135,10 +135,19 @@ pub fn find(scene: &Scene, voxel_size: f32) -> Vec<EmitterLight> {
             continue;
         }
         let first = p.first_index as usize;
-        let indices = &scene.indices[first..first + p.index_count as usize];
+        let Some(indices) = scene.indices.get(first..first + p.index_count as usize) else {
+            continue;
+        };
+        let position = |v: u32| {
+            scene
+                .vertices
+                .get(v as usize)
+                .map(|v| Vec3::from(v.position))
+        };
         let triangles: Vec<[Vec3; 3]> = indices
             .chunks_exact(3)
-            .map(|t| [t[0], t[1], t[2]].map(|v| Vec3::from(scene.vertices[v as usize].position)))
+            .filter_map(|t| Some([position(t[0])?, position(t[1])?, position(t[2])?]))
+            .filter(|t| t.iter().all(|p| p.is_finite()))
             .collect();
         let mut e = EmitterLight {
             instance: i,

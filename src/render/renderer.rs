@@ -254,8 +254,10 @@ impl Renderer {
     pub fn new(ctx: &Arc<Context>, scene: &Scene, settings: RenderSettings) -> VkResult<Renderer> {
         let mut states = ResourceStates::default();
         let gi_settings = &settings.gi;
+        // Only where the voxels are lit: the views of the voxels' materials show every
+        // emitter's emission.
         let emitters =
-            if settings.mode.uses_voxels() && gi_settings.emitter_lights && !gi_settings.paper {
+            if settings.mode.lights_voxels() && gi_settings.emitter_lights && !gi_settings.paper {
                 let grid = crate::gi::VoxelGrid::fit(&scene.bounds, gi_settings.voxels);
                 emitter_lights::find(scene, grid.voxel_size())
             } else {
