@@ -249,6 +249,7 @@ fn a_moving_small_emitter_lights_where_it_ends() {
     let lamp_node = start.instances[1].node;
     let mut set = settings(true);
     set.dynamic_nodes = vec![lamp_node];
+    set.timings = true;
     let ctx = context();
     let stats = ctx.stats.clone();
     let (before, after) = {
@@ -257,7 +258,21 @@ fn a_moving_small_emitter_lights_where_it_ends() {
         let before = r.radiance();
         r.set_node_transform(lamp_node, end.instances[1].world);
         r.render(true).expect("frame");
-        (before, r.radiance())
+        let after = r.radiance();
+        // Set where it is: nothing to draw or light again.
+        r.set_node_transform(lamp_node, end.instances[1].world);
+        r.render(false).expect("frame");
+        let runs = |pass: &str| {
+            let timer = r.timer.as_ref().expect("lavapipe has timestamps");
+            let found = timer.samples.iter().find(|(name, _)| name == pass);
+            found.map_or(0, |(_, v)| v.len())
+        };
+        assert_eq!(
+            [runs("shadows"), runs("inject")],
+            [2, 2],
+            "shadow and inject passes over the first frame, the move and a frame set in place"
+        );
+        (before, after)
     };
     drop(ctx);
     assert_eq!(stats.count(), 0, "{}", stats.messages().join("\n"));

@@ -1033,8 +1033,10 @@ impl Renderer {
     /// it moves through. Setting the transform it has changes nothing.
     pub fn set_node_transform(&mut self, node: usize, world: Mat4) {
         let (mut moved_static, mut moved_dynamic) = (false, false);
+        let mut moved = Vec::new();
         for (i, &n) in self.instance_nodes.iter().enumerate() {
             if n == node && self.transforms[i] != world {
+                moved.push(i);
                 // Where it was and where it goes: the views that see either draw again.
                 let b = &self.instance_bounds[i];
                 let swept = b
@@ -1057,8 +1059,7 @@ impl Renderer {
         // again.
         let mut moved_light = false;
         for k in 0..self.emitters.len() {
-            let i = self.emitters[k].instance;
-            if self.instance_nodes[i] == node {
+            if moved.contains(&self.emitters[k].instance) {
                 self.emitters[k].place(&world);
                 let v = &self.gpu.light_views[self.lights.len() + k];
                 let views = v.first as usize..v.first as usize + v.views.len();
