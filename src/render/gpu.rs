@@ -139,3 +139,111 @@ pub struct ShadowView {
     /// 1 if perspective; texel size (metres for ortho, per metre of depth for perspective)
     pub info: Vec4,
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vk::reflect::{shader_interface, Struct};
+
+    /// (field, offset, size) of each named field of a Rust struct.
+    macro_rules! fields {
+        ($t:ty { $($f:ident),* $(,)? }) => {
+            [$((
+                stringify!($f),
+                std::mem::offset_of!($t, $f),
+                size_of_field(|s: &$t| &s.$f),
+            )),*]
+        };
+    }
+
+    fn size_of_field<T, F>(_: impl Fn(&T) -> &F) -> usize {
+        std::mem::size_of::<F>()
+    }
+
+    /// The Rust mirror has the GLSL struct's members, in order, at its offsets and sizes, and
+    /// its size is the struct's stride in an array (std430) or the block's size.
+    fn same_layout(glsl: &Struct, rust: &[(&str, usize, usize)], rust_size: usize) {
+        let g: Vec<(&str, usize, usize)> = glsl
+            .members
+            .iter()
+            .map(|m| (m.name.as_str(), m.offset as usize, m.size as usize))
+            .collect();
+        assert_eq!(g, rust, "{}: GLSL (left) against Rust (right)", glsl.name);
+        assert_eq!(glsl.size as usize, rust_size, "{}: size", glsl.name);
+    }
+
+    fn glsl_struct(shader: &str, name: &str) -> Struct {
+        shader_interface(shader)
+            .unwrap()
+            .struct_named(name)
+            .unwrap_or_else(|| panic!("{shader} has no struct {name}"))
+            .clone()
+    }
+
+    #[test]
+    fn frame_uniforms_match_the_glsl_frame_block() {
+        same_layout(
+            &glsl_struct("deferred_lighting.comp", "Frame"),
+            &fields!(FrameUniforms {
+                view_proj,
+                view,
+                proj,
+                eye,
+                counts,
+                shadow,
+                grid,
+                grid_info,
+                cone,
+                trace,
+                cones,
+                tuning
+            }),
+            std::mem::size_of::<FrameUniforms>(),
+        );
+    }
+
+    #[test]
+    fn scene_structs_match_the_glsl_structs() {
+        same_layout(
+            &glsl_struct("gbuffer.frag", "Material"),
+            &fields!(GpuMaterial {
+                base_color,
+                emissive,
+                specular,
+                params,
+                tex0,
+                tex1
+            }),
+            std::mem::size_of::<GpuMaterial>(),
+        );
+        same_layout(
+            &glsl_struct("deferred_lighting.comp", "Light"),
+            &fields!(GpuLight {
+                position_type,
+                direction_range,
+                radiance,
+                cone
+            }),
+            std::mem::size_of::<GpuLight>(),
+        );
+        same_layout(
+            &glsl_struct("deferred_lighting.comp", "ShadowView"),
+            &fields!(ShadowView { view_proj, info }),
+            std::mem::size_of::<ShadowView>(),
+        );
+    }
+
+    #[test]
+    fn a_layout_that_drifts_is_caught() {
+        // Two members swapped on the Rust side.
+        let glsl = glsl_struct("deferred_lighting.comp", "ShadowView");
+        let swapped = std::panic::catch_unwind(|| {
+            same_layout(
+                &glsl,
+                &[("info", 64, 16), ("view_proj", 0, 64)],
+                std::mem::size_of::<ShadowView>(),
+            )
+        });
+        assert!(swapped.is_err());
+    }
+}

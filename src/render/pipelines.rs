@@ -9,15 +9,7 @@ fn check<T>(r: Result<T, vk::Result>, call: &'static str) -> VkResult<T> {
 }
 
 pub fn spirv(name: &str) -> VkResult<Vec<u32>> {
-    let bytes = crate::shaders::SPIRV
-        .iter()
-        .find(|(n, _)| *n == name)
-        .map(|(_, b)| *b)
-        .ok_or_else(|| VkError::NoShader(name.into()))?;
-    Ok(bytes
-        .chunks_exact(4)
-        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-        .collect())
+    crate::shaders::words(name).ok_or_else(|| VkError::NoShader(name.into()))
 }
 
 struct Module<'a> {

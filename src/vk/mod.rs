@@ -2,6 +2,7 @@
 
 mod context;
 pub mod graph;
+pub mod reflect;
 mod resources;
 mod timing;
 
