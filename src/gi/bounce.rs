@@ -164,32 +164,65 @@ impl Bounce {
         })
     }
 
-    /// Records bounce `name`; `last`: the last bounce, which adds the bounces not traced.
-    #[allow(clippy::too_many_arguments)]
-    pub fn record(
+    /// Clears the list's count and dispatch arguments.
+    pub fn record_list_clear(&self, ctx: &Context, g: &mut Graph, name: &str) {
+        g.pass(name)
+            .buffer(&self.list, Access::TransferWrite)
+            .record(|cmd| unsafe {
+                // Dispatch (0, 1, 1), count 0.
+                ctx.device
+                    .cmd_update_buffer(cmd, self.list.raw, 0, as_bytes(&[0u32, 1, 1, 0]));
+            });
+    }
+
+    /// Lists the filled voxels (the list holds until the voxels change: static ones once,
+    /// dynamic ones every frame).
+    pub fn record_list(
         &self,
         ctx: &Context,
         g: &mut Graph,
         volumes: &Volumes,
         scene_set: vk::DescriptorSet,
-        voxels_changed: bool,
-        last: bool,
         name: &str,
     ) {
-        let d = &ctx.device;
-        // The list holds until the voxels change (static ones once, dynamic ones every frame).
-        if voxels_changed {
-            self.record_list(d, g, volumes, scene_set);
-        }
-        if let Some(tail) = &self.tail {
-            let clear = format!("{name} sums clear");
-            g.pass(&clear)
-                .buffer(&tail.reflectance, Access::TransferWrite)
-                .untimed()
-                .record(|cmd| unsafe {
-                    d.cmd_fill_buffer(cmd, tail.reflectance.raw, 0, REFLECTANCE_BYTES, 0);
-                });
-        }
+        read_voxel_data(g.pass(name), volumes)
+            .buffer(&self.list, Access::ComputeStorageReadWrite)
+            .record(|cmd| unsafe {
+                self.list_pipeline
+                    .bind_compute(&ctx.device, cmd, &[scene_set, self.set.raw]);
+                let groups = volumes.grid.resolution.div_ceil(4);
+                ctx.device.cmd_dispatch(cmd, groups, groups, groups);
+            });
+    }
+
+    /// Whether the gather leaves its light to an add pass and sums the reflectance (all but
+    /// --paper, whose gather adds to the radiance itself).
+    pub fn adds_separately(&self) -> bool {
+        self.tail.is_some()
+    }
+
+    /// Clears the reflectance sums the gather adds to.
+    pub fn record_sums_clear(&self, ctx: &Context, g: &mut Graph, name: &str) {
+        let Some(tail) = &self.tail else {
+            return;
+        };
+        g.pass(name)
+            .buffer(&tail.reflectance, Access::TransferWrite)
+            .record(|cmd| unsafe {
+                ctx.device
+                    .cmd_fill_buffer(cmd, tail.reflectance.raw, 0, REFLECTANCE_BYTES, 0);
+            });
+    }
+
+    /// Each listed voxel gathers light from the directional volumes.
+    pub fn record_gather(
+        &self,
+        ctx: &Context,
+        g: &mut Graph,
+        volumes: &Volumes,
+        scene_set: vk::DescriptorSet,
+        name: &str,
+    ) {
         let mut pass =
             read_voxel_data(g.pass(name), volumes).buffer(&self.list, Access::ComputeIndirectRead);
         pass = match &self.tail {
@@ -203,15 +236,31 @@ impl Bounce {
             pass = pass.image(f, Access::ComputeSampled);
         }
         pass.record(|cmd| unsafe {
-            self.pipeline
-                .bind_compute(d, cmd, &[scene_set, self.set.raw, self.cone_set.raw]);
-            d.cmd_dispatch_indirect(cmd, self.list.raw, 0);
+            self.pipeline.bind_compute(
+                &ctx.device,
+                cmd,
+                &[scene_set, self.set.raw, self.cone_set.raw],
+            );
+            ctx.device.cmd_dispatch_indirect(cmd, self.list.raw, 0);
         });
+    }
+
+    /// Adds what the gather left to the voxels' radiance; `last`: the last bounce, which also
+    /// adds the bounces not traced.
+    pub fn record_add(
+        &self,
+        ctx: &Context,
+        g: &mut Graph,
+        volumes: &Volumes,
+        scene_set: vk::DescriptorSet,
+        last: bool,
+        name: &str,
+    ) {
+        let d = &ctx.device;
         let Some(tail) = &self.tail else {
             return;
         };
-        let add = format!("{name} add");
-        let mut pass = read_voxel_data(g.pass(&add), volumes)
+        let mut pass = read_voxel_data(g.pass(name), volumes)
             .image(&volumes.radiance, Access::ComputeStorageReadWrite)
             .buffer(&self.list, Access::ComputeIndirectRead)
             .buffer(&tail.reflected, Access::ComputeStorageRead)
@@ -232,30 +281,5 @@ impl Bounce {
             );
             d.cmd_dispatch_indirect(cmd, self.list.raw, 0);
         });
-    }
-
-    /// Clears the list's count and dispatch, then lists the filled voxels.
-    fn record_list(
-        &self,
-        d: &ash::Device,
-        g: &mut Graph,
-        volumes: &Volumes,
-        scene_set: vk::DescriptorSet,
-    ) {
-        g.pass("voxel list clear")
-            .buffer(&self.list, Access::TransferWrite)
-            .untimed()
-            .record(|cmd| unsafe {
-                // Dispatch (0, 1, 1), count 0.
-                d.cmd_update_buffer(cmd, self.list.raw, 0, as_bytes(&[0u32, 1, 1, 0]));
-            });
-        read_voxel_data(g.pass("voxel list"), volumes)
-            .buffer(&self.list, Access::ComputeStorageReadWrite)
-            .record(|cmd| unsafe {
-                self.list_pipeline
-                    .bind_compute(d, cmd, &[scene_set, self.set.raw]);
-                let groups = volumes.grid.resolution.div_ceil(4);
-                d.cmd_dispatch(cmd, groups, groups, groups);
-            });
     }
 }

@@ -68,12 +68,11 @@ impl Inject {
         volumes: &Volumes,
         scene_set: vk::DescriptorSet,
         shadow_map: &Image,
-        suffix: &str,
+        name: &str,
     ) {
         let d = &ctx.device;
         let n = volumes.grid.resolution;
-        let name = format!("inject{suffix}");
-        let mut pass = read_voxel_data(g.pass(&name), volumes)
+        let mut pass = read_voxel_data(g.pass(name), volumes)
             .image(shadow_map, Access::ComputeSampled)
             .image(&volumes.radiance, Access::ComputeStorageWrite);
         if let Some(dir) = &volumes.emit_dir {

@@ -90,26 +90,10 @@ impl Mip {
         })
     }
 
-    /// `suffix` tells the passes after the bounce apart in timings.
-    pub fn record(&self, ctx: &Context, g: &mut Graph, volumes: &Volumes, suffix: &str) {
-        let d = &ctx.device;
-        let m = volumes.grid.aniso_resolution();
-        let dispatch = |cmd, p: &Pipeline, set: &Set, size: u32| unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, p.raw);
-            d.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                p.layout,
-                0,
-                &[set.raw],
-                &[],
-            );
-            let groups = size.div_ceil(4);
-            d.cmd_dispatch(cmd, groups, groups, groups);
-        };
-        let base_name = format!("mip base{suffix}");
+    /// The directional volumes' base level from the radiance volume.
+    pub fn record_base(&self, ctx: &Context, g: &mut Graph, volumes: &Volumes, name: &str) {
         let mut pass = g
-            .pass(&base_name)
+            .pass(name)
             .image(&volumes.radiance, Access::ComputeStorageRead);
         if let Some(dir) = &volumes.emit_dir {
             pass = pass.image(dir, Access::ComputeStorageRead);
@@ -120,19 +104,33 @@ impl Mip {
         for f in volumes.directional() {
             pass = pass.image(f, Access::ComputeStorageWrite);
         }
-        pass.record(|cmd| dispatch(cmd, &self.base, &self.base_set, m));
+        let size = volumes.grid.aniso_resolution();
+        pass.record(|cmd| dispatch(ctx, cmd, &self.base, &self.base_set, size));
+    }
 
-        let name = format!("mip volume{suffix}");
-        if let Some(p) = &self.volume {
-            for (i, set) in self.level_sets.iter().enumerate() {
-                let level = i as u32 + 1;
-                let mut pass = g.pass(&name);
-                for f in volumes.directional() {
-                    pass = pass.image(f, Access::ComputeStorageReadWrite);
-                }
-                let size = (m >> level).max(1);
-                pass.record(|cmd| dispatch(cmd, p, set, size));
+    /// Each mip level of the directional volumes from the one before (a pass per level).
+    pub fn record_levels(&self, ctx: &Context, g: &mut Graph, volumes: &Volumes, name: &str) {
+        let Some(p) = &self.volume else {
+            return;
+        };
+        let m = volumes.grid.aniso_resolution();
+        for (i, set) in self.level_sets.iter().enumerate() {
+            let level = i as u32 + 1;
+            let mut pass = g.pass(name);
+            for f in volumes.directional() {
+                pass = pass.image(f, Access::ComputeStorageReadWrite);
             }
+            let size = (m >> level).max(1);
+            pass.record(|cmd| dispatch(ctx, cmd, p, set, size));
         }
+    }
+}
+
+/// Binds `p` with `set` and dispatches over a `size`^3 volume.
+fn dispatch(ctx: &Context, cmd: vk::CommandBuffer, p: &Pipeline, set: &Set, size: u32) {
+    let groups = size.div_ceil(4);
+    unsafe {
+        p.bind_compute(&ctx.device, cmd, &[set.raw]);
+        ctx.device.cmd_dispatch(cmd, groups, groups, groups);
     }
 }

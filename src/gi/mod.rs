@@ -327,12 +327,8 @@ pub struct Gi {
     pub emission_scale: f32,
     /// The radiance volumes hold radiance x this (see [`radiance_scale`]).
     pub radiance_scale: f32,
-    /// Static geometry must be voxelized (first frame, or a static node moved).
-    pub static_dirty: bool,
-    /// Dynamic geometry must be voxelized again (first frame, or a dynamic node moved).
-    pub dynamic_dirty: bool,
-    /// The voxels must be lit again: a light changed (or the first frame).
-    pub lights_dirty: bool,
+    /// What the next frame must redo (everything, on the first).
+    pub dirty: Dirty,
     _pool: DescriptorPool,
 }
 
@@ -455,9 +451,7 @@ impl Gi {
                     .fold(max_emission, f32::max);
                 radiance_scale(scene, grid.voxel_size(), lights)
             },
-            static_dirty: true,
-            dynamic_dirty: true,
-            lights_dirty: true,
+            dirty: Dirty::ALL,
             _pool: pool,
         })
     }
@@ -470,96 +464,212 @@ impl Gi {
             | flag(self.settings.cone_shadows, FLAG_CONE_SHADOWS)
     }
 
-    /// Records the voxel passes up to the lit, mipmapped volumes (the trace is separate).
-    #[allow(clippy::too_many_arguments)]
-    pub fn record_volumes(
-        &self,
-        ctx: &Context,
-        g: &mut Graph,
-        gpu: &GpuScene,
-        scene_set: vk::DescriptorSet,
-        shadow_map: &Image,
-        draw_static: &dyn Fn(vk::CommandBuffer, &crate::render::pipelines::Pipeline, u32),
-        draw_dynamic: &dyn Fn(vk::CommandBuffer, &crate::render::pipelines::Pipeline, u32),
-    ) {
-        if self.static_dirty {
-            self.voxelizer
-                .record(ctx, g, &self.volumes, gpu, false, draw_static);
+    /// The voxel passes a frame records when `dirty` says what changed, in order: the volumes
+    /// keep the last frame's light, bounces included, until a node or a light moves, so a
+    /// still frame records none (it only traces).
+    pub fn steps(&self, dirty: Dirty) -> Vec<Step> {
+        let mut steps = Vec::new();
+        if dirty.static_voxels {
+            steps.extend([
+                Step::Clear { dynamic: false },
+                Step::Voxelize { dynamic: false },
+            ]);
         }
         // The static pass may clear the dynamic voxels too (the paper's clears all).
-        let dynamic_changed = self.dynamic && (self.static_dirty || self.dynamic_dirty);
+        let dynamic_changed = self.dynamic && (dirty.static_voxels || dirty.dynamic_voxels);
         if dynamic_changed {
-            self.voxelizer
-                .record(ctx, g, &self.volumes, gpu, true, draw_dynamic);
+            steps.extend([
+                Step::Clear { dynamic: true },
+                Step::Voxelize { dynamic: true },
+            ]);
         }
-        // Nothing the voxels' light depends on changed: the volumes keep the last frame's
-        // light, bounces included, and a still frame only traces.
-        let voxels_changed = self.static_dirty || dynamic_changed;
-        if !(voxels_changed || self.lights_dirty) {
-            return;
+        let voxels_changed = dirty.static_voxels || dynamic_changed;
+        if !(voxels_changed || dirty.lights) || self.lighting.is_none() {
+            return steps;
         }
-        if let Some((inject, mip)) = &self.lighting {
-            inject.record(ctx, g, &self.volumes, scene_set, shadow_map, "");
-            mip.record(ctx, g, &self.volumes, "");
-            if let Some(b) = &self.bounce {
-                for k in 2..=self.settings.bounces {
-                    // The bounce adds to the radiance volume in place, so from the third on
-                    // the direct light is injected again first; the directional volumes still
-                    // hold the light of the bounces before.
-                    let (name, suffix) = bounce_names(k);
-                    if k > 2 {
-                        inject.record(ctx, g, &self.volumes, scene_set, shadow_map, &suffix);
-                    }
-                    let list = voxels_changed && k == 2;
-                    let last = k == self.settings.bounces;
-                    b.record(ctx, g, &self.volumes, scene_set, list, last, &name);
-                    mip.record(ctx, g, &self.volumes, &suffix);
-                }
+        steps.extend([
+            Step::Inject { bounce: 1 },
+            Step::MipBase { bounce: 1 },
+            Step::MipLevels { bounce: 1 },
+        ]);
+        let Some(b) = &self.bounce else {
+            return steps;
+        };
+        let last = self.settings.bounces;
+        for bounce in 2..=last {
+            // The bounce adds to the radiance volume in place, so from the third on the direct
+            // light is injected again first; the directional volumes still hold the light of
+            // the bounces before.
+            if bounce > 2 {
+                steps.push(Step::Inject { bounce });
             }
+            // The list of filled voxels holds until the voxels change.
+            if voxels_changed && bounce == 2 {
+                steps.extend([Step::VoxelListClear, Step::VoxelList]);
+            }
+            if b.adds_separately() {
+                steps.push(Step::SumsClear { bounce });
+            }
+            steps.push(Step::Gather { bounce });
+            if b.adds_separately() {
+                steps.push(Step::Add {
+                    bounce,
+                    last: bounce == last,
+                });
+            }
+            steps.extend([Step::MipBase { bounce }, Step::MipLevels { bounce }]);
+        }
+        steps
+    }
+
+    /// Records one step of [`Gi::steps`].
+    pub fn record_step(&self, ctx: &Context, g: &mut Graph, step: Step, input: &StepInputs) {
+        let name = step.name();
+        let v = &self.volumes;
+        let lighting = || {
+            self.lighting
+                .as_ref()
+                .expect("a lighting step without lighting")
+        };
+        let bounce = || self.bounce.as_ref().expect("a bounce step without bounces");
+        match step {
+            Step::Clear { dynamic } => self.voxelizer.record_clear(ctx, g, v, dynamic, &name),
+            Step::Voxelize { dynamic } => {
+                let draw = if dynamic {
+                    input.draw_dynamic
+                } else {
+                    input.draw_static
+                };
+                self.voxelizer
+                    .record_voxelize(ctx, g, v, input.gpu, dynamic, &name, draw)
+            }
+            Step::Inject { .. } => {
+                lighting()
+                    .0
+                    .record(ctx, g, v, input.scene_set, input.shadow_map, &name)
+            }
+            Step::MipBase { .. } => lighting().1.record_base(ctx, g, v, &name),
+            Step::MipLevels { .. } => lighting().1.record_levels(ctx, g, v, &name),
+            Step::VoxelListClear => bounce().record_list_clear(ctx, g, &name),
+            Step::VoxelList => bounce().record_list(ctx, g, v, input.scene_set, &name),
+            Step::SumsClear { .. } => bounce().record_sums_clear(ctx, g, &name),
+            Step::Gather { .. } => bounce().record_gather(ctx, g, v, input.scene_set, &name),
+            Step::Add { last, .. } => bounce().record_add(ctx, g, v, input.scene_set, last, &name),
         }
     }
 
     /// The voxel passes have run for the current scene and lights.
     pub fn mark_clean(&mut self) {
-        self.static_dirty = false;
-        self.dynamic_dirty = false;
-        self.lights_dirty = false;
-    }
-
-    /// Passes this renderer runs, for `voxgi info`.
-    pub fn passes(&self) -> Vec<String> {
-        let mut p: Vec<String> = vec!["voxelize static".into()];
-        if self.dynamic {
-            p.extend(["clear dynamic".into(), "voxelize dynamic".into()]);
-        }
-        if self.lighting.is_some() {
-            p.extend(["inject".into(), "mip base".into(), "mip volume".into()]);
-        }
-        if self.bounce.is_some() {
-            for k in 2..=self.settings.bounces {
-                let (name, s) = bounce_names(k);
-                if k > 2 {
-                    p.push(format!("inject{s}"));
-                }
-                p.push(name.clone());
-                if !self.settings.paper {
-                    p.push(format!("{name} add"));
-                }
-                p.extend([format!("mip base{s}"), format!("mip volume{s}")]);
-            }
-        }
-        p
+        self.dirty = Dirty::NONE;
     }
 }
 
-/// The bounce pass of light bounce `k` and the suffix that tells the passes after it apart in
-/// timings: "bounce" and " (bounce)" for the second, "bounce 3" and " (bounce 3)" on.
-fn bounce_names(k: u32) -> (String, String) {
-    if k == 2 {
-        ("bounce".into(), " (bounce)".into())
-    } else {
-        (format!("bounce {k}"), format!(" (bounce {k})"))
+/// What the voxels need redone before a frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Dirty {
+    /// Static geometry must be voxelized (first frame, or a static node moved).
+    pub static_voxels: bool,
+    /// Dynamic geometry must be voxelized again (first frame, or a dynamic node moved).
+    pub dynamic_voxels: bool,
+    /// The voxels must be lit again: a light changed (or the first frame).
+    pub lights: bool,
+}
+
+impl Dirty {
+    /// The first frame's: everything.
+    pub const ALL: Dirty = Dirty {
+        static_voxels: true,
+        dynamic_voxels: true,
+        lights: true,
+    };
+    /// A still frame's: nothing.
+    pub const NONE: Dirty = Dirty {
+        static_voxels: false,
+        dynamic_voxels: false,
+        lights: false,
+    };
+}
+
+/// One pass of the voxel side of a frame ([`Gi::steps`]). Its name is its debug label, its
+/// timing's name and what `voxgi info` lists.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Step {
+    /// Clears what the static (or the dynamic) voxelization rebuilds.
+    Clear {
+        dynamic: bool,
+    },
+    /// Step 1: voxelization of the static (or the dynamic) geometry.
+    Voxelize {
+        dynamic: bool,
+    },
+    /// Step 2: direct light into the voxels, for light bounce `bounce` (1: the first; again
+    /// before each bounce from the third).
+    Inject {
+        bounce: u32,
+    },
+    /// Step 3: the directional volumes' base level, then their mip levels (a pass per level),
+    /// after light bounce `bounce`.
+    MipBase {
+        bounce: u32,
+    },
+    MipLevels {
+        bounce: u32,
+    },
+    /// The list of filled voxels the bounces run over: its count cleared, then filled.
+    VoxelListClear,
+    VoxelList,
+    /// The second (and later) bounce: the reflectance sums cleared, each listed voxel's gather,
+    /// and what it gathered added to the radiance (`last`: with the bounces not traced).
+    SumsClear {
+        bounce: u32,
+    },
+    Gather {
+        bounce: u32,
+    },
+    Add {
+        bounce: u32,
+        last: bool,
+    },
+}
+
+impl Step {
+    /// The pass's name: "bounce" and " (bounce)" tell the second bounce's passes apart, "bounce
+    /// 3" and " (bounce 3)" the third's.
+    pub fn name(&self) -> String {
+        let kind = |dynamic: bool| if dynamic { "dynamic" } else { "static" };
+        let suffix = |bounce: u32| match bounce {
+            1 => String::new(),
+            2 => " (bounce)".into(),
+            k => format!(" (bounce {k})"),
+        };
+        let bounce_name = |bounce: u32| match bounce {
+            2 => "bounce".to_string(),
+            k => format!("bounce {k}"),
+        };
+        match *self {
+            Step::Clear { dynamic } => format!("clear {}", kind(dynamic)),
+            Step::Voxelize { dynamic } => format!("voxelize {}", kind(dynamic)),
+            Step::Inject { bounce } => format!("inject{}", suffix(bounce)),
+            Step::MipBase { bounce } => format!("mip base{}", suffix(bounce)),
+            Step::MipLevels { bounce } => format!("mip volume{}", suffix(bounce)),
+            Step::VoxelListClear => "voxel list clear".into(),
+            Step::VoxelList => "voxel list".into(),
+            Step::SumsClear { bounce } => format!("{} sums clear", bounce_name(bounce)),
+            Step::Gather { bounce } => bounce_name(bounce),
+            Step::Add { bounce, .. } => format!("{} add", bounce_name(bounce)),
+        }
     }
+}
+
+/// What the voxel steps need from the renderer.
+pub struct StepInputs<'a> {
+    pub gpu: &'a GpuScene,
+    pub scene_set: vk::DescriptorSet,
+    pub shadow_map: &'a Image,
+    /// Draws the static (or the dynamic) instances with the voxelization pipeline and the
+    /// given push-constant flags.
+    pub draw_static: &'a dyn Fn(vk::CommandBuffer, &crate::render::pipelines::Pipeline, u32),
+    pub draw_dynamic: &'a dyn Fn(vk::CommandBuffer, &crate::render::pipelines::Pipeline, u32),
 }
 
 #[cfg(test)]

@@ -284,9 +284,8 @@ impl Gi {
                     }
                 }
             });
-            g.pass("voxel readback to host")
+            g.barrier("voxel readback to host")
                 .buffer(&host, Access::HostRead)
-                .untimed()
                 .record(|_| {});
         })?;
         states.forget(host.raw);
@@ -476,11 +475,9 @@ impl Gi {
                 g.pass("non-finite readback")
                     .buffer(&host, Access::TransferWrite)
                     .image(img, Access::TransferRead)
-                    .untimed()
                     .record(|cmd| unsafe { copy_level(ctx, cmd, img, level, side, &host, 0) });
-                g.pass("non-finite readback to host")
+                g.barrier("non-finite readback to host")
                     .buffer(&host, Access::HostRead)
-                    .untimed()
                     .record(|_| {});
             })?;
             let bytes = host.mapped().expect("readback is host-visible");

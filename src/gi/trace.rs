@@ -108,14 +108,15 @@ impl Trace {
         gbuffer: &[Image],
         out: &Image,
         mode: TraceMode,
+        name: &str,
     ) {
         let d = &ctx.device;
         let (w, h) = (out.width(), out.height());
         let debug = (mode as u32) >= 10;
         let mut pass = if debug {
-            read_voxel_data(g.pass("voxel view"), volumes).image(out, Access::ComputeStorageWrite)
+            read_voxel_data(g.pass(name), volumes).image(out, Access::ComputeStorageWrite)
         } else {
-            let mut p = g.pass("trace").image(out, Access::ComputeStorageReadWrite);
+            let mut p = g.pass(name).image(out, Access::ComputeStorageReadWrite);
             for img in gbuffer {
                 p = p.image(img, Access::ComputeSampled);
             }

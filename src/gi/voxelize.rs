@@ -104,25 +104,18 @@ impl Voxelizer {
         pass
     }
 
-    /// Clears and voxelizes the static (or, with `dynamic`, the dynamic) geometry. `draw` binds
-    /// the scene and material sets and draws the instances of that kind with the given flags.
-    pub fn record(
+    /// Clears what the static (or, with `dynamic`, the dynamic) voxelization rebuilds (the
+    /// paper's static pass clears all, its dynamic pass the voxels not flagged static).
+    pub fn record_clear(
         &self,
         ctx: &Context,
         g: &mut Graph,
         volumes: &Volumes,
-        gpu: &GpuScene,
         dynamic: bool,
-        draw: &dyn Fn(vk::CommandBuffer, &Pipeline, u32),
+        name: &str,
     ) {
         let d = &ctx.device;
         let n = volumes.grid.resolution;
-        // Clear what this pass rebuilds.
-        let clear_name = if dynamic {
-            "clear dynamic"
-        } else {
-            "clear static"
-        };
         match (&volumes.data, dynamic, &self.clear_dynamic) {
             (
                 VoxelData::Paper {
@@ -135,7 +128,7 @@ impl Voxelizer {
                 Some((p, set)),
             ) => {
                 let mut pass = g
-                    .pass(clear_name)
+                    .pass(name)
                     .buffer(&volumes.words[0], Access::ComputeStorageRead);
                 for b in [Some(albedo), Some(normal), emission.as_ref()]
                     .into_iter()
@@ -171,7 +164,7 @@ impl Voxelizer {
             }
             _ => {
                 // A fill clears what this pass rebuilds (the paper's static pass clears all).
-                let mut pass = g.pass(clear_name);
+                let mut pass = g.pass(name);
                 for b in volumes.data.written_by(dynamic) {
                     pass = pass.buffer(b, Access::TransferWrite);
                 }
@@ -188,12 +181,23 @@ impl Voxelizer {
                 });
             }
         }
+    }
 
-        let name = if dynamic {
-            "voxelize dynamic"
-        } else {
-            "voxelize static"
-        };
+    /// Voxelizes the static (or, with `dynamic`, the dynamic) geometry. `draw` binds the scene
+    /// and material sets and draws the instances of that kind with the given flags.
+    #[allow(clippy::too_many_arguments)]
+    pub fn record_voxelize(
+        &self,
+        ctx: &Context,
+        g: &mut Graph,
+        volumes: &Volumes,
+        gpu: &GpuScene,
+        dynamic: bool,
+        name: &str,
+        draw: &dyn Fn(vk::CommandBuffer, &Pipeline, u32),
+    ) {
+        let d = &ctx.device;
+        let n = volumes.grid.resolution;
         let mut pass = Self::declare(
             g.pass(name),
             volumes,

@@ -2,7 +2,7 @@ use super::emitter_lights::{self, EmitterLight};
 use super::gpu::{as_bytes, FrameUniforms};
 use super::gpu_scene::{light_table, GpuScene};
 use super::pipelines::{self, Desc, DescriptorPool, GraphicsDesc, Pipeline, SetLayout, Spec};
-use crate::gi::{Gi, GiInputs, GiSettings, TraceMode};
+use crate::gi::{Dirty, Gi, GiInputs, GiSettings, StepInputs, TraceMode};
 use crate::scene::{Camera, Material, Scene, TexRef};
 use crate::vk::{
     vk, Access, Buffer, Context, Graph, Image, ImageDesc, PassTimer, ResourceStates, Sampler,
@@ -71,6 +71,40 @@ impl std::str::FromStr for Mode {
                 ))
             }
         })
+    }
+}
+
+/// One step of a frame. [`Renderer::steps`] lists a frame's in the order recorded; recording
+/// and [`Renderer::passes`] (what `voxgi info` shows) walk the same list, and a step's name is
+/// its pass's debug label and its name in `--timings`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Step {
+    /// The shadow views that changed (every one on the first frame).
+    Shadows,
+    /// A pass of the voxel side: voxelization, light injection, mipmaps, bounces.
+    Voxels(crate::gi::Step),
+    GBuffer,
+    /// Direct light per pixel from the G-buffer and the shadow maps.
+    Lighting,
+    /// Cones per pixel, added to the direct light (the modes that shade pixels).
+    Trace,
+    /// The first voxel along each camera ray (the voxel modes).
+    VoxelView,
+    /// The radiance image copied to host memory.
+    Readback,
+}
+
+impl Step {
+    pub fn name(&self) -> String {
+        match self {
+            Step::Shadows => "shadows".into(),
+            Step::Voxels(s) => s.name(),
+            Step::GBuffer => "gbuffer".into(),
+            Step::Lighting => "lighting".into(),
+            Step::Trace => "trace".into(),
+            Step::VoxelView => "voxel view".into(),
+            Step::Readback => "readback".into(),
+        }
     }
 }
 
@@ -247,6 +281,8 @@ pub struct Renderer {
     specular_needed: bool,
     /// Wall time of each frame from submission to its fence, in milliseconds.
     pub frame_ms: Vec<f64>,
+    /// The passes the last frame recorded, in order, by their debug labels.
+    pub recorded: Vec<String>,
     ctx: Arc<Context>,
 }
 
@@ -612,6 +648,7 @@ impl Renderer {
             gi,
             specular_needed,
             frame_ms: Vec::new(),
+            recorded: Vec::new(),
             settings,
             frame_ubo,
             gbuffer,
@@ -795,6 +832,7 @@ impl Renderer {
             g.omit_barriers_of = self.omit_barriers_of.clone();
             self.record(&mut g, readback);
             after(&mut g, &self.hdr);
+            self.recorded = std::mem::take(&mut g.labels);
         }
         self.states = states;
         unsafe { d.end_command_buffer(cmd) }.map_err(|result| VkError::Call {
@@ -817,116 +855,185 @@ impl Renderer {
         Ok(())
     }
 
+    /// The steps of a frame drawn when `shadows` (a shadow view must be drawn again) and `voxels`
+    /// say what changed, in the order recorded.
+    fn steps_when(&self, shadows: bool, voxels: Dirty, readback: bool) -> Vec<Step> {
+        let mut steps = Vec::new();
+        // A shadow view changes only when its light moves or a node moves through it.
+        if shadows {
+            steps.push(Step::Shadows);
+        }
+        if let Some(gi) = &self.gi {
+            steps.extend(gi.steps(voxels).into_iter().map(Step::Voxels));
+        }
+        let mode = self.settings.mode;
+        if mode.shades_pixels() {
+            steps.push(Step::GBuffer);
+        }
+        if matches!(mode, Mode::Full | Mode::Direct) {
+            steps.push(Step::Lighting);
+        }
+        if self.gi.is_some() {
+            steps.push(if mode.shades_pixels() {
+                Step::Trace
+            } else {
+                Step::VoxelView
+            });
+        }
+        if readback {
+            steps.push(Step::Readback);
+        }
+        steps
+    }
+
+    /// The steps the next frame records.
+    pub fn steps(&self, readback: bool) -> Vec<Step> {
+        let voxels = self.gi.as_ref().map_or(Dirty::NONE, |gi| gi.dirty);
+        let shadows = self.shadow_views_dirty.iter().any(|&d| d);
+        self.steps_when(shadows, voxels, readback)
+    }
+
+    /// The passes of `voxgi render`'s first frame, in order, by the names their debug labels
+    /// and `--timings` give them: every shadow view is drawn, the voxels made and lit; later
+    /// frames record only what changed (a still frame: the G-buffer, lighting and trace), and
+    /// the last one the readback.
+    pub fn passes(&self) -> Vec<String> {
+        let shadows = self.gpu.shadow_view_count > 0;
+        self.steps_when(shadows, Dirty::ALL, true)
+            .iter()
+            .map(Step::name)
+            .collect()
+    }
+
     fn record(&self, g: &mut Graph, readback: bool) {
+        for step in self.steps(readback) {
+            self.record_step(g, step);
+        }
+    }
+
+    fn record_step(&self, g: &mut Graph, step: Step) {
+        match step {
+            Step::Shadows => self.record_shadows(g),
+            Step::Voxels(s) => self.record_voxels(g, s),
+            Step::GBuffer => self.record_gbuffer(g),
+            Step::Lighting => self.record_lighting(g),
+            Step::Trace | Step::VoxelView => self.record_trace(g),
+            Step::Readback => self.record_readback(g),
+        }
+    }
+
+    /// Draws the shadow views that changed.
+    fn record_shadows(&self, g: &mut Graph) {
         let ctx = &self.ctx;
         let d = &ctx.device;
         let res = self.settings.shadow_resolution;
-
-        // A shadow view changes only when its light moves or a node moves through it.
-        if self.shadow_views_dirty.iter().any(|&d| d) {
-            let mut pass = g
-                .pass("shadows")
-                .image(&self.shadow_map, Access::DepthAttachmentWrite)
-                .buffer(&self.gpu.vertices, Access::VertexBuffer)
-                .buffer(&self.gpu.indices, Access::IndexBuffer);
-            // Alpha-masked materials sample their base colour.
-            for t in &self.gpu.textures {
-                pass = pass.image(t, Access::FragmentSampled);
+        let name = Step::Shadows.name();
+        let mut pass = g
+            .pass(&name)
+            .image(&self.shadow_map, Access::DepthAttachmentWrite)
+            .buffer(&self.gpu.vertices, Access::VertexBuffer)
+            .buffer(&self.gpu.indices, Access::IndexBuffer);
+        // Alpha-masked materials sample their base colour.
+        for t in &self.gpu.textures {
+            pass = pass.image(t, Access::FragmentSampled);
+        }
+        pass.record(|cmd| {
+            for view in 0..self.gpu.shadow_view_count {
+                if !self.shadow_views_dirty[view as usize] {
+                    continue;
+                }
+                let depth = pipelines::cleared_depth(
+                    self.shadow_map.layer_view(view),
+                    vk::AttachmentStoreOp::STORE,
+                );
+                let info = vk::RenderingInfo::default()
+                    .render_area(pipelines::area(res, res))
+                    .layer_count(1)
+                    .depth_attachment(&depth);
+                unsafe { d.cmd_begin_rendering(cmd, &info) };
+                pipelines::set_viewport(ctx, cmd, res, res);
+                // An emitter light's own faces would hide it (its centre may be inside).
+                let own = |i: usize| {
+                    self.emitter_of[i].is_some_and(|k| {
+                        let v = &self.gpu.light_views[self.lights.len() + k];
+                        (v.first..v.first + v.views.len() as u32).contains(&view)
+                    })
+                };
+                self.draw_instances(cmd, &self.shadow_pipeline, |_| view, |i| !own(i));
+                unsafe { d.cmd_end_rendering(cmd) };
             }
-            pass.record(|cmd| {
-                for view in 0..self.gpu.shadow_view_count {
-                    if !self.shadow_views_dirty[view as usize] {
-                        continue;
-                    }
-                    let depth = pipelines::cleared_depth(
-                        self.shadow_map.layer_view(view),
-                        vk::AttachmentStoreOp::STORE,
-                    );
-                    let info = vk::RenderingInfo::default()
-                        .render_area(pipelines::area(res, res))
-                        .layer_count(1)
-                        .depth_attachment(&depth);
-                    unsafe { d.cmd_begin_rendering(cmd, &info) };
-                    pipelines::set_viewport(ctx, cmd, res, res);
-                    // An emitter light's own faces would hide it (its centre may be inside).
-                    let own = |i: usize| {
-                        self.emitter_of[i].is_some_and(|k| {
-                            let v = &self.gpu.light_views[self.lights.len() + k];
-                            (v.first..v.first + v.views.len() as u32).contains(&view)
-                        })
-                    };
-                    self.draw_instances(cmd, &self.shadow_pipeline, |_| view, |i| !own(i));
-                    unsafe { d.cmd_end_rendering(cmd) };
-                }
-            });
-        }
+        });
+    }
 
-        let mode = self.settings.mode;
-        if let Some(gi) = &self.gi {
-            let draw = |dynamic: bool| {
-                move |cmd: vk::CommandBuffer, p: &Pipeline, flags: u32| {
-                    self.draw_instances(
-                        cmd,
-                        p,
-                        |i| {
-                            let light = self.emitter_of[i].map_or(0, |_| crate::gi::EMITTER_LIGHT);
-                            self.mirrored(i) | flags | light
-                        },
-                        |i| self.dynamic_instances[i] == dynamic,
-                    )
-                }
-            };
-            gi.record_volumes(
-                ctx,
-                g,
-                &self.gpu,
-                self.scene_set,
-                &self.shadow_map,
-                &draw(false),
-                &draw(true),
-            );
-        }
+    /// One voxel step; voxelization draws the instances of its kind (static or dynamic).
+    fn record_voxels(&self, g: &mut Graph, step: crate::gi::Step) {
+        let Some(gi) = &self.gi else {
+            return;
+        };
+        let draw = |dynamic: bool| {
+            move |cmd: vk::CommandBuffer, p: &Pipeline, flags: u32| {
+                self.draw_instances(
+                    cmd,
+                    p,
+                    |i| {
+                        let light = self.emitter_of[i].map_or(0, |_| crate::gi::EMITTER_LIGHT);
+                        self.mirrored(i) | flags | light
+                    },
+                    |i| self.dynamic_instances[i] == dynamic,
+                )
+            }
+        };
+        let inputs = StepInputs {
+            gpu: &self.gpu,
+            scene_set: self.scene_set,
+            shadow_map: &self.shadow_map,
+            draw_static: &draw(false),
+            draw_dynamic: &draw(true),
+        };
+        gi.record_step(&self.ctx, g, step, &inputs);
+    }
 
-        if mode.shades_pixels() {
-            self.record_gbuffer(g);
+    /// Cones per pixel, or the first voxel along each camera ray (the voxel modes).
+    fn record_trace(&self, g: &mut Graph) {
+        let Some(gi) = &self.gi else {
+            return;
+        };
+        let name = if self.settings.mode.shades_pixels() {
+            Step::Trace
+        } else {
+            Step::VoxelView
         }
-        if matches!(mode, Mode::Full | Mode::Direct) {
-            self.record_lighting(g);
-        }
-        if let Some(gi) = &self.gi {
-            let trace_mode = match mode {
-                Mode::Full => TraceMode::Full,
-                Mode::Indirect => TraceMode::Indirect,
-                Mode::Ao => TraceMode::Ao,
-                Mode::VoxelsAlbedo => TraceMode::VoxelAlbedo,
-                Mode::VoxelsNormal => TraceMode::VoxelNormal,
-                Mode::VoxelsEmission => TraceMode::VoxelEmission,
-                Mode::VoxelsRadiance if self.settings.mip.is_some() => TraceMode::Directional,
-                Mode::VoxelsRadiance => TraceMode::VoxelRadiance,
-                Mode::Direct => unreachable!("direct mode has no voxel passes"),
-            };
-            gi.trace.record(
-                ctx,
-                g,
-                &gi.volumes,
-                self.scene_set,
-                &self.gbuffer,
-                &self.hdr,
-                trace_mode,
-            );
-        }
-
-        if readback {
-            self.record_readback(g);
-        }
+        .name();
+        let trace_mode = match self.settings.mode {
+            Mode::Full => TraceMode::Full,
+            Mode::Indirect => TraceMode::Indirect,
+            Mode::Ao => TraceMode::Ao,
+            Mode::VoxelsAlbedo => TraceMode::VoxelAlbedo,
+            Mode::VoxelsNormal => TraceMode::VoxelNormal,
+            Mode::VoxelsEmission => TraceMode::VoxelEmission,
+            Mode::VoxelsRadiance if self.settings.mip.is_some() => TraceMode::Directional,
+            Mode::VoxelsRadiance => TraceMode::VoxelRadiance,
+            Mode::Direct => unreachable!("direct mode has no voxel passes"),
+        };
+        gi.trace.record(
+            &self.ctx,
+            g,
+            &gi.volumes,
+            self.scene_set,
+            &self.gbuffer,
+            &self.hdr,
+            trace_mode,
+            &name,
+        );
     }
 
     fn record_gbuffer(&self, g: &mut Graph) {
         let ctx = &self.ctx;
         let d = &ctx.device;
         let (w, h) = (self.settings.width, self.settings.height);
+        let name = Step::GBuffer.name();
         let mut pass = g
-            .pass("gbuffer")
+            .pass(&name)
             .image(&self.depth, Access::DepthAttachmentWrite)
             .buffer(&self.gpu.vertices, Access::VertexBuffer)
             .buffer(&self.gpu.indices, Access::IndexBuffer);
@@ -967,8 +1074,9 @@ impl Renderer {
     fn record_lighting(&self, g: &mut Graph) {
         let d = &self.ctx.device;
         let (w, h) = (self.settings.width, self.settings.height);
+        let name = Step::Lighting.name();
         let mut pass = g
-            .pass("lighting")
+            .pass(&name)
             .image(&self.shadow_map, Access::ComputeSampled)
             .image(&self.hdr, Access::ComputeStorageWrite);
         for img in &self.gbuffer {
@@ -993,7 +1101,7 @@ impl Renderer {
         let d = &self.ctx.device;
         let (w, h) = (self.settings.width, self.settings.height);
         {
-            g.pass("readback")
+            g.pass(&Step::Readback.name())
                 .image(&self.hdr, Access::TransferRead)
                 .buffer(&self.readback, Access::TransferWrite)
                 .record(|cmd| unsafe {
@@ -1017,9 +1125,8 @@ impl Renderer {
                         &[region],
                     );
                 });
-            g.pass("to host")
+            g.barrier("to host")
                 .buffer(&self.readback, Access::HostRead)
-                .untimed()
                 .record(|_| {});
         }
     }
@@ -1052,8 +1159,8 @@ impl Renderer {
             }
         }
         if let Some(gi) = self.gi.as_mut() {
-            gi.static_dirty |= moved_static;
-            gi.dynamic_dirty |= moved_dynamic;
+            gi.dirty.static_voxels |= moved_static;
+            gi.dirty.dynamic_voxels |= moved_dynamic;
         }
         // An emitter light goes with its faces: its views draw again and the voxels are lit
         // again.
@@ -1070,7 +1177,7 @@ impl Renderer {
         if moved_light {
             self.write_lights();
             if let Some(gi) = self.gi.as_mut() {
-                gi.lights_dirty = true;
+                gi.dirty.lights = true;
             }
         }
     }
@@ -1164,39 +1271,8 @@ impl Renderer {
     pub fn relight(&mut self) {
         self.shadow_views_dirty.fill(true);
         if let Some(gi) = self.gi.as_mut() {
-            gi.lights_dirty = true;
+            gi.dirty.lights = true;
         }
-    }
-
-    /// The passes a frame records, in order (what `--timings` will list; the shadow maps only
-    /// on the first frame and after a light or a node moved through them, the voxel passes
-    /// only on the first frame and after a light or a node moved).
-    pub fn passes(&self) -> Vec<String> {
-        let mut p = Vec::new();
-        if self.gpu.shadow_view_count > 0 {
-            p.push("shadows".to_string());
-        }
-        if let Some(gi) = &self.gi {
-            p.extend(gi.passes().iter().map(|s| s.to_string()));
-        }
-        let mode = self.settings.mode;
-        if mode.shades_pixels() {
-            p.push("gbuffer".into());
-        }
-        if matches!(mode, Mode::Full | Mode::Direct) {
-            p.push("lighting".into());
-        }
-        if self.gi.is_some() {
-            p.push(
-                if mode.shades_pixels() {
-                    "trace"
-                } else {
-                    "voxel view"
-                }
-                .into(),
-            );
-        }
-        p
     }
 
     /// Debug readback of the voxel volumes as the last frame left them (None in direct mode).

@@ -221,14 +221,12 @@ impl Display {
                 )
             });
         }
-        g.pass("to present")
+        g.barrier("to present")
             .external_image(target.image, color, Access::Present)
-            .untimed()
             .record(|_| {});
         if let Some(b) = shot {
-            g.pass("screenshot to host")
+            g.barrier("screenshot to host")
                 .buffer(b, Access::HostRead)
-                .untimed()
                 .record(|_| {});
         }
         Ok(())

@@ -291,6 +291,8 @@ pub struct Graph<'a> {
     /// Test hook: the pass of this name records without its barriers (to prove that
     /// synchronization validation catches a missing one).
     pub omit_barriers_of: Option<String>,
+    /// The passes recorded, in order: each one's debug label and timing name.
+    pub labels: Vec<String>,
 }
 
 /// A pass being declared; `record` emits its barriers, label and timestamps and runs it.
@@ -298,7 +300,8 @@ pub struct PassBuilder<'g, 'a, 'r> {
     graph: &'g mut Graph<'a>,
     name: &'r str,
     uses: Vec<(Res<'r>, Access)>,
-    timed: bool,
+    /// A pass (labelled and timed), or only the barriers its accesses need.
+    is_pass: bool,
 }
 
 impl<'a> Graph<'a> {
@@ -314,6 +317,7 @@ impl<'a> Graph<'a> {
             states,
             timer,
             omit_barriers_of: None,
+            labels: Vec::new(),
         }
     }
 
@@ -322,12 +326,25 @@ impl<'a> Graph<'a> {
         self.states.acquired(image, stage);
     }
 
+    /// A pass: its declared accesses' barriers, then its commands inside a debug label and a
+    /// timestamp scope of its name.
     pub fn pass<'g, 'r>(&'g mut self, name: &'r str) -> PassBuilder<'g, 'a, 'r> {
         PassBuilder {
             graph: self,
             name,
             uses: Vec::new(),
-            timed: true,
+            is_pass: true,
+        }
+    }
+
+    /// Only the barriers that hand resources on to their next access (the host, presentation):
+    /// no commands, so no label or timing. `name` tells it apart in validation messages.
+    pub fn barrier<'g, 'r>(&'g mut self, name: &'r str) -> PassBuilder<'g, 'a, 'r> {
+        PassBuilder {
+            graph: self,
+            name,
+            uses: Vec::new(),
+            is_pass: false,
         }
     }
 }
@@ -349,12 +366,6 @@ impl<'r> PassBuilder<'_, '_, 'r> {
         access: Access,
     ) -> Self {
         self.uses.push((Res::External(image, range), access));
-        self
-    }
-
-    /// No timestamp scope (for passes that only move resources between accesses).
-    pub fn untimed(mut self) -> Self {
-        self.timed = false;
         self
     }
 
@@ -407,8 +418,12 @@ impl<'r> PassBuilder<'_, '_, 'r> {
         let omit = g.omit_barriers_of.as_deref() == Some(self.name);
         *g.ctx.stats.recording.lock().unwrap() = Some(self.name.to_string());
         let label = CString::new(self.name).unwrap_or_default();
+        let labelled = self.is_pass.then_some(g.ctx.debug_device.as_ref()).flatten();
+        if self.is_pass {
+            g.labels.push(self.name.to_string());
+        }
         unsafe {
-            if let Some(dd) = &g.ctx.debug_device {
+            if let Some(dd) = labelled {
                 dd.cmd_begin_debug_utils_label(
                     cmd,
                     &vk::DebugUtilsLabelEXT::default().label_name(&label),
@@ -422,7 +437,7 @@ impl<'r> PassBuilder<'_, '_, 'r> {
                 device.cmd_pipeline_barrier2(cmd, &dep);
             }
         }
-        let scope = match (self.timed, g.timer.as_mut()) {
+        let scope = match (self.is_pass, g.timer.as_mut()) {
             (true, Some(t)) => Some(t.begin(device, cmd, self.name)),
             _ => None,
         };
@@ -442,10 +457,8 @@ impl<'r> PassBuilder<'_, '_, 'r> {
             };
             t.end(device, cmd, scope);
         }
-        unsafe {
-            if let Some(dd) = &g.ctx.debug_device {
-                dd.cmd_end_debug_utils_label(cmd);
-            }
+        if let Some(dd) = labelled {
+            unsafe { dd.cmd_end_debug_utils_label(cmd) };
         }
         *g.ctx.stats.recording.lock().unwrap() = None;
         r
