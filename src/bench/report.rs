@@ -86,23 +86,10 @@ fn json_string(s: &str) -> String {
 
 /// The GiSettings fields as (column name, value) pairs, shared by CSV and JSON.
 fn gi_fields(r: &Row) -> Vec<(&'static str, String)> {
-    let g = &r.gi;
-    vec![
-        ("voxels", g.voxels.to_string()),
-        ("bounces", g.bounces.to_string()),
-        ("paper", g.paper.to_string()),
-        ("cone_count", g.cone_count.to_string()),
-        ("cone_aperture_deg", g.cone_aperture_deg.to_string()),
-        ("step_factor", g.step_factor.to_string()),
-        ("max_distance", g.max_distance.to_string()),
-        ("start_offset", g.start_offset.to_string()),
-        ("ao_falloff", g.ao_falloff.to_string()),
-        ("voxel_shadows", g.voxel_shadows.to_string()),
-        ("cone_shadows", g.cone_shadows.to_string()),
-        ("lod_offset", g.lod_offset.to_string()),
-        ("tail", g.tail.to_string()),
-        ("emitter_lights", g.emitter_lights.to_string()),
-    ]
+    crate::gi::FIELDS
+        .iter()
+        .map(|f| (f.column, (f.get)(&r.gi).column()))
+        .collect()
 }
 
 /// One line per setting, in sweep order; a pass a setting did not run is an empty cell.

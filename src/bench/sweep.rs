@@ -11,7 +11,7 @@
 //! varies slowest). `paper=1` starts from the paper's settings at the given voxel resolution,
 //! and the other axes are applied on top of that.
 
-use crate::gi::GiSettings;
+use crate::gi::{GiSettings, FIELDS};
 
 /// One setting of the sweep.
 #[derive(Clone, Debug, PartialEq)]
@@ -49,64 +49,15 @@ pub fn label(gi: &GiSettings) -> String {
     if gi.paper {
         s.push_str(" paper");
     }
-    let mut add = |name: &str, differs: bool, value: String| {
-        if differs {
-            s.push_str(&format!(" {name}={value}"));
+    for f in FIELDS
+        .iter()
+        .filter(|f| !matches!(f.axis, "voxels" | "paper"))
+    {
+        let (v, base) = ((f.get)(gi), (f.get)(&b));
+        if v != base {
+            s.push_str(&format!(" {}={}", f.axis, v.label()));
         }
-    };
-    let flag = |v: bool| if v { "1" } else { "0" }.to_string();
-    add("bounces", gi.bounces != b.bounces, gi.bounces.to_string());
-    add(
-        "cones",
-        gi.cone_count != b.cone_count,
-        gi.cone_count.to_string(),
-    );
-    add(
-        "aperture",
-        gi.cone_aperture_deg != b.cone_aperture_deg,
-        gi.cone_aperture_deg.to_string(),
-    );
-    add(
-        "step",
-        gi.step_factor != b.step_factor,
-        gi.step_factor.to_string(),
-    );
-    add(
-        "max-distance",
-        gi.max_distance != b.max_distance,
-        gi.max_distance.to_string(),
-    );
-    add(
-        "start-offset",
-        gi.start_offset != b.start_offset,
-        gi.start_offset.to_string(),
-    );
-    add(
-        "ao-falloff",
-        gi.ao_falloff != b.ao_falloff,
-        gi.ao_falloff.to_string(),
-    );
-    add(
-        "voxel-shadows",
-        gi.voxel_shadows != b.voxel_shadows,
-        flag(gi.voxel_shadows),
-    );
-    add(
-        "cone-shadows",
-        gi.cone_shadows != b.cone_shadows,
-        flag(gi.cone_shadows),
-    );
-    add(
-        "lod-offset",
-        gi.lod_offset != b.lod_offset,
-        gi.lod_offset.to_string(),
-    );
-    add("tail", gi.tail != b.tail, flag(gi.tail));
-    add(
-        "emitter-lights",
-        gi.emitter_lights != b.emitter_lights,
-        flag(gi.emitter_lights),
-    );
+    }
     s
 }
 
@@ -174,49 +125,6 @@ fn default_preset() -> Vec<GiSettings> {
     v
 }
 
-/// An axis: its name and how one value of it is applied (after checking its range).
-type Apply = fn(&mut GiSettings, f64);
-
-const AXES: &[(&str, f64, f64, bool, Apply)] = &[
-    // (name, min, max, integer, apply); voxels and paper are read first (they pick the base).
-    ("voxels", 4.0, 1024.0, true, |g, v| g.voxels = v as u32),
-    ("paper", 0.0, 1.0, true, |g, v| g.paper = v != 0.0),
-    (
-        "bounces",
-        1.0,
-        crate::gi::MAX_BOUNCES as f64,
-        true,
-        |g, v| g.bounces = v as u32,
-    ),
-    ("cones", 1.0, 16.0, true, |g, v| g.cone_count = v as u32),
-    ("aperture", 0.5, 179.0, false, |g, v| {
-        g.cone_aperture_deg = v as f32
-    }),
-    ("step", 0.05, 4.0, false, |g, v| g.step_factor = v as f32),
-    ("max-distance", 0.01, 2.0, false, |g, v| {
-        g.max_distance = v as f32
-    }),
-    ("start-offset", 0.0, 16.0, false, |g, v| {
-        g.start_offset = v as f32
-    }),
-    ("ao-falloff", 0.0, 100.0, false, |g, v| {
-        g.ao_falloff = v as f32
-    }),
-    ("voxel-shadows", 0.0, 1.0, true, |g, v| {
-        g.voxel_shadows = v != 0.0
-    }),
-    ("cone-shadows", 0.0, 1.0, true, |g, v| {
-        g.cone_shadows = v != 0.0
-    }),
-    ("lod-offset", 0.0, 4.0, false, |g, v| {
-        g.lod_offset = v as f32
-    }),
-    ("tail", 0.0, 1.0, true, |g, v| g.tail = v != 0.0),
-    ("emitter-lights", 0.0, 1.0, true, |g, v| {
-        g.emitter_lights = v != 0.0
-    }),
-];
-
 fn parse_value(axis: &str, text: &str, min: f64, max: f64, integer: bool) -> Result<f64, String> {
     let t = text.trim();
     let v = match t {
@@ -243,17 +151,18 @@ fn product(spec: &str) -> Result<Vec<GiSettings>, String> {
             .split_once('=')
             .ok_or_else(|| format!("{item:?}: expected NAME=VALUES or a preset (default, tiny)"))?;
         let name = name.trim();
-        let index = AXES.iter().position(|a| a.0 == name).ok_or_else(|| {
-            let names: Vec<&str> = AXES.iter().map(|a| a.0).collect();
+        let index = FIELDS.iter().position(|f| f.axis == name).ok_or_else(|| {
+            let names: Vec<&str> = FIELDS.iter().map(|f| f.axis).collect();
             format!("unknown axis {name:?} (the axes are: {})", names.join(", "))
         })?;
         if axes.iter().any(|(i, _)| *i == index) {
             return Err(format!("axis {name} is given twice"));
         }
-        let (_, min, max, integer, _) = AXES[index];
+        let f = &FIELDS[index];
+        let integer = (f.get)(&GiSettings::default()).integer();
         let values = values
             .split(',')
-            .map(|v| parse_value(name, v, min, max, integer))
+            .map(|v| parse_value(name, v, f.min, f.max, integer))
             .collect::<Result<Vec<_>, _>>()?;
         axes.push((index, values));
     }
@@ -273,14 +182,15 @@ fn product(spec: &str) -> Result<Vec<GiSettings>, String> {
             chosen[k] = values[rest % values.len()];
             rest /= values.len();
         }
-        let value_of = |axis: usize| {
+        // Voxels and paper are read first: they pick the base the others apply to.
+        let value_of = |axis: &str| {
             axes.iter()
                 .zip(&chosen)
-                .find(|((i, _), _)| *i == axis)
+                .find(|((i, _), _)| FIELDS[*i].axis == axis)
                 .map(|(_, v)| *v)
         };
-        let voxels = value_of(0).map_or(GiSettings::default().voxels, |v| v as u32);
-        let mut gi = if value_of(1).is_some_and(|v| v != 0.0) {
+        let voxels = value_of("voxels").map_or(GiSettings::default().voxels, |v| v as u32);
+        let mut gi = if value_of("paper").is_some_and(|v| v != 0.0) {
             GiSettings::paper(voxels)
         } else {
             GiSettings {
@@ -289,8 +199,9 @@ fn product(spec: &str) -> Result<Vec<GiSettings>, String> {
             }
         };
         for ((index, _), v) in axes.iter().zip(&chosen) {
-            if *index > 1 {
-                (AXES[*index].4)(&mut gi, *v);
+            let f = &FIELDS[*index];
+            if !matches!(f.axis, "voxels" | "paper") {
+                (f.set)(&mut gi, *v);
             }
         }
         out.push(gi);

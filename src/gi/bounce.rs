@@ -2,19 +2,15 @@
 //! and adds what it reflects to its radiance (then the mips run again). The last bounce also
 //! adds the bounces not traced, as a geometric series (glsl/bounce_tail.comp).
 
-use super::inject::{read_voxel_data, voxel_data_descs};
+use super::inject::{read_voxel_data, variant};
 use super::volumes::Volumes;
-use crate::render::gpu::as_bytes;
-use crate::render::pipelines::{self, Desc, DescriptorPool, Pipeline, Set, SetLayout, Spec};
-use crate::vk::{vk, Access, Buffer, Context, Graph, VkResult};
+use crate::vk::{vk, Access, Bindings, Buffer, Context, Graph, Pass, SharedSet, Usage, VkResult};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
 pub struct Bounce {
-    list_pipeline: Pipeline,
-    pipeline: Pipeline,
-    set: Set,
-    cone_set: Set,
+    list_pass: Pass,
+    gather: Pass,
     /// The filled voxels (voxel_list.comp), after the bounce's dispatch arguments and count.
     list: Buffer,
     /// Except for --paper, which adds a voxel's bounce light as it gathers it.
@@ -23,9 +19,9 @@ pub struct Bounce {
 
 /// What the gather leaves for bounce_tail.comp, which adds it to the voxels.
 struct Tail {
-    pipeline: Pipeline,
-    /// Per listed voxel, the light it reflects (four half floats).
-    reflected: Buffer,
+    pass: Pass,
+    /// Per listed voxel, the light it reflects (four half floats); the passes' sets hold it.
+    _reflected: Buffer,
     /// Sums over the listed voxels of albedo times closed share, and their count (64-bit fixed
     /// point each).
     reflectance: Buffer,
@@ -43,36 +39,39 @@ fn list_capacity(n: u32) -> u64 {
     (n * n * n).min(64 * n * n)
 }
 
-/// The directional volumes as cones sample them (bindings 1 to 6) and where their light goes
-/// (7, except for --paper), with the full-resolution radiance volume at binding 0 when
-/// `full_res`.
-pub fn cone_set(pool: &DescriptorPool, volumes: &Volumes, full_res: bool) -> VkResult<Set> {
-    let s = volumes.sampler.raw;
-    let mut descs = Vec::new();
+/// The directional volumes as cones sample them (glsl/cone_tracing.glsl), and where their
+/// light goes (except for --paper); with `full_res`, also the full-resolution radiance volume
+/// and its light directions.
+pub fn cone_volumes(table: Bindings, volumes: &Volumes, full_res: bool) -> Bindings {
+    let s = &volumes.sampler;
+    let mut t = table;
     if full_res {
-        descs.push((0, Desc::Sampled(volumes.radiance.view, s)));
-        if let Some(dir) = &volumes.emit_dir {
-            descs.push((8, Desc::Sampled(dir.view, s)));
-        }
+        t = t
+            .sampled("radiance_tex", &volumes.radiance, s)
+            .with(volumes.emit_dir.as_ref(), |t, d| {
+                t.sampled("emit_dir_tex", d, s)
+            });
     }
-    for (i, f) in volumes.faces.iter().enumerate() {
-        descs.push((1 + i as u32, Desc::Sampled(f.view, s)));
+    for (f, name) in volumes
+        .faces
+        .iter()
+        .zip(["nx", "px", "ny", "py", "nz", "pz"])
+    {
+        t = t.sampled(&format!("aniso_{name}"), f, s);
     }
-    if let Some(dir) = &volumes.light_dir {
-        descs.push((7, Desc::Sampled(dir.view, s)));
-    }
-    if let Some(pos) = &volumes.light_pos {
-        descs.push((9, Desc::Sampled(pos.view, s)));
-    }
-    pool.set(vk::ShaderStageFlags::COMPUTE, &descs)
+    t.with(volumes.light_dir.as_ref(), |t, d| {
+        t.sampled("light_dir", d, s)
+    })
+    .with(volumes.light_pos.as_ref(), |t, p| {
+        t.sampled("light_pos", p, s)
+    })
 }
 
 impl Bounce {
     pub fn new(
         ctx: &Arc<Context>,
-        pool: &DescriptorPool,
+        scene: &SharedSet,
         volumes: &Volumes,
-        scene_layout: &SetLayout,
         paper: bool,
         tail: bool,
     ) -> VkResult<Bounce> {
@@ -105,60 +104,57 @@ impl Bounce {
             )?;
             Some((reflected, reflectance))
         };
-        let mut descs = voxel_data_descs(volumes);
-        descs.push((5, Desc::StorageImage(volumes.radiance.view)));
-        descs.push((6, Desc::Storage(&list)));
-        if let Some(dir) = &volumes.emit_dir {
-            descs.push((9, Desc::StorageImage(dir.view)));
-        }
-        if let Some((reflected, reflectance)) = &buffers {
-            descs.push((11, Desc::Storage(reflected)));
-            descs.push((12, Desc::Storage(reflectance)));
-        }
-        let set = pool.set(vk::ShaderStageFlags::COMPUTE, &descs)?;
-        let cone_set = cone_set(pool, volumes, false)?;
-        let variant = |name: &str| {
-            if paper {
-                format!("{name}:PAPER")
-            } else {
-                name.to_string()
-            }
-        };
-        let list_pipeline = pipelines::compute(
+        let list_pass = Pass::compute(
             ctx,
-            &variant("voxel_list.comp"),
-            &[scene_layout, &set.layout],
+            &variant("voxel_list.comp", paper),
+            &[scene],
+            read_voxel_data(Bindings::new(), volumes).buffer("VoxelList", &list, Usage::ReadWrite),
             0,
-            &Spec(vec![]),
         )?;
-        let shader = variant("inject_bounce.comp");
-        let pipeline = pipelines::compute(
+        let gather = read_voxel_data(Bindings::new(), volumes)
+            .buffer("VoxelList", &list, Usage::Indirect)
+            .with(buffers.as_ref(), |t, (reflected, reflectance)| {
+                t.buffer("Reflected", reflected, Usage::Write).buffer(
+                    "Reflectance",
+                    reflectance,
+                    Usage::ReadWrite,
+                )
+            });
+        // --paper: the gather adds to the radiance itself.
+        let gather = if paper {
+            gather.image("radiance", &volumes.radiance, Usage::ReadWrite)
+        } else {
+            gather
+        };
+        let gather = Pass::compute(
             ctx,
-            &shader,
-            &[scene_layout, &set.layout, &cone_set.layout],
+            &variant("inject_bounce.comp", paper),
+            &[scene],
+            cone_volumes(gather, volumes, false),
             0,
-            &Spec(vec![]),
         )?;
         let tail = match buffers {
-            Some((reflected, reflectance)) => Some(Tail {
-                pipeline: pipelines::compute(
-                    ctx,
-                    "bounce_tail.comp",
-                    &[scene_layout, &set.layout],
-                    4,
-                    &Spec(vec![]),
-                )?,
-                reflected,
-                reflectance,
-                enabled: tail,
-            }),
+            Some((reflected, reflectance)) => {
+                let add = read_voxel_data(Bindings::new(), volumes)
+                    .image("radiance", &volumes.radiance, Usage::ReadWrite)
+                    .buffer("VoxelList", &list, Usage::Indirect)
+                    .buffer("Reflected", &reflected, Usage::Read)
+                    .buffer("Reflectance", &reflectance, Usage::Read)
+                    .with(volumes.emit_dir.as_ref(), |t, d| {
+                        t.image("emit_dir", d, Usage::ReadWrite)
+                    });
+                Some(Tail {
+                    pass: Pass::compute(ctx, "bounce_tail.comp", &[scene], add, 4)?,
+                    _reflected: reflected,
+                    reflectance,
+                    enabled: tail,
+                })
+            }
             None => None,
         };
         Ok(Bounce {
-            list_pipeline,
-            pipeline,
-            set,
-            cone_set,
+            list_pass,
+            gather,
             list,
             tail,
         })
@@ -170,8 +166,11 @@ impl Bounce {
             .buffer(&self.list, Access::TransferWrite)
             .record(|cmd| unsafe {
                 // Dispatch (0, 1, 1), count 0.
-                ctx.device
-                    .cmd_update_buffer(cmd, self.list.raw, 0, as_bytes(&[0u32, 1, 1, 0]));
+                let args: Vec<u8> = [0u32, 1, 1, 0]
+                    .iter()
+                    .flat_map(|w| w.to_le_bytes())
+                    .collect();
+                ctx.device.cmd_update_buffer(cmd, self.list.raw, 0, &args);
             });
     }
 
@@ -185,14 +184,12 @@ impl Bounce {
         scene_set: vk::DescriptorSet,
         name: &str,
     ) {
-        read_voxel_data(g.pass(name), volumes)
-            .buffer(&self.list, Access::ComputeStorageReadWrite)
-            .record(|cmd| unsafe {
-                self.list_pipeline
-                    .bind_compute(&ctx.device, cmd, &[scene_set, self.set.raw]);
-                let groups = volumes.grid.resolution.div_ceil(4);
-                ctx.device.cmd_dispatch(cmd, groups, groups, groups);
-            });
+        let p = &self.list_pass;
+        p.declare(g.pass(name), 0).record(|cmd| unsafe {
+            p.bind(&ctx.device, cmd, &[(0, scene_set)], 0);
+            let groups = volumes.grid.resolution.div_ceil(4);
+            ctx.device.cmd_dispatch(cmd, groups, groups, groups);
+        });
     }
 
     /// Whether the gather leaves its light to an add pass and sums the reflectance (all but
@@ -219,28 +216,12 @@ impl Bounce {
         &self,
         ctx: &Context,
         g: &mut Graph,
-        volumes: &Volumes,
         scene_set: vk::DescriptorSet,
         name: &str,
     ) {
-        let mut pass =
-            read_voxel_data(g.pass(name), volumes).buffer(&self.list, Access::ComputeIndirectRead);
-        pass = match &self.tail {
-            Some(tail) => pass
-                .buffer(&tail.reflected, Access::ComputeStorageWrite)
-                .buffer(&tail.reflectance, Access::ComputeStorageReadWrite),
-            // --paper: the gather adds to the radiance itself.
-            None => pass.image(&volumes.radiance, Access::ComputeStorageReadWrite),
-        };
-        for f in volumes.directional() {
-            pass = pass.image(f, Access::ComputeSampled);
-        }
-        pass.record(|cmd| unsafe {
-            self.pipeline.bind_compute(
-                &ctx.device,
-                cmd,
-                &[scene_set, self.set.raw, self.cone_set.raw],
-            );
+        let p = &self.gather;
+        p.declare(g.pass(name), 0).record(|cmd| unsafe {
+            p.bind(&ctx.device, cmd, &[(0, scene_set)], 0);
             ctx.device.cmd_dispatch_indirect(cmd, self.list.raw, 0);
         });
     }
@@ -251,7 +232,6 @@ impl Bounce {
         &self,
         ctx: &Context,
         g: &mut Graph,
-        volumes: &Volumes,
         scene_set: vk::DescriptorSet,
         last: bool,
         name: &str,
@@ -260,25 +240,11 @@ impl Bounce {
         let Some(tail) = &self.tail else {
             return;
         };
-        let mut pass = read_voxel_data(g.pass(name), volumes)
-            .image(&volumes.radiance, Access::ComputeStorageReadWrite)
-            .buffer(&self.list, Access::ComputeIndirectRead)
-            .buffer(&tail.reflected, Access::ComputeStorageRead)
-            .buffer(&tail.reflectance, Access::ComputeStorageRead);
-        if let Some(dir) = &volumes.emit_dir {
-            pass = pass.image(dir, Access::ComputeStorageReadWrite);
-        }
         let push = u32::from(last && tail.enabled);
-        pass.record(|cmd| unsafe {
-            tail.pipeline
-                .bind_compute(d, cmd, &[scene_set, self.set.raw]);
-            d.cmd_push_constants(
-                cmd,
-                tail.pipeline.layout,
-                tail.pipeline.push_stages,
-                0,
-                as_bytes(&[push]),
-            );
+        let p = &tail.pass;
+        p.declare(g.pass(name), 0).record(|cmd| unsafe {
+            p.bind(d, cmd, &[(0, scene_set)], 0);
+            p.pipeline.push(d, cmd, &push.to_le_bytes());
             d.cmd_dispatch_indirect(cmd, self.list.raw, 0);
         });
     }

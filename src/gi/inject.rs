@@ -1,64 +1,61 @@
 //! Step 2: voxel illumination. Direct light per voxel (shadowed by the shadow maps), plus
 //! emission, into the radiance volume.
 
-use super::volumes::Volumes;
-use crate::render::pipelines::{self, Desc, DescriptorPool, Pipeline, Set, SetLayout, Spec};
-use crate::vk::{vk, Access, Context, Graph, Image, VkResult};
+use super::volumes::{Volumes, VoxelData};
+use crate::vk::{vk, Bindings, Context, Graph, Image, Pass, Sampler, SharedSet, Usage, VkResult};
 use std::sync::Arc;
 
-/// The voxel data as the compute passes read it (glsl/voxel_data.glsl): the address tables of
-/// the static pass (binding 0) and the dynamic one (binding 2; zeros without dynamic geometry).
-pub fn voxel_data_descs(volumes: &Volumes) -> Vec<(u32, Desc<'_>)> {
-    vec![
-        (0, Desc::Storage(&volumes.words[0])),
-        (2, Desc::Storage(&volumes.words[1])),
-    ]
+/// The voxel data as the compute passes read it (glsl/voxel_data.glsl): the tables of the
+/// words' addresses (the static and the dynamic pass's, or --paper's one) and a read of every
+/// buffer of words they point to.
+pub fn read_voxel_data(table: Bindings, volumes: &Volumes) -> Bindings {
+    let table = match &volumes.data {
+        VoxelData::Paper { .. } => table.addresses("PaperWords", &volumes.words[0]),
+        VoxelData::Sums { .. } => table
+            .addresses("StaticWords", &volumes.words[0])
+            .addresses("DynamicWords", &volumes.words[1]),
+    };
+    volumes
+        .data
+        .buffers()
+        .into_iter()
+        .fold(table, |t, b| t.reaches(b, Usage::Read))
 }
 
-/// Declares a compute read of the voxel data: the words through their addresses, and the
-/// tables of addresses.
-pub fn read_voxel_data<'g, 'a, 'r>(
-    mut pass: crate::vk::graph::PassBuilder<'g, 'a, 'r>,
-    volumes: &'r Volumes,
-) -> crate::vk::graph::PassBuilder<'g, 'a, 'r> {
-    for b in volumes.words.iter().chain(volumes.data.read_by_shaders()) {
-        pass = pass.buffer(b, Access::ComputeStorageRead);
+/// A compute shader's name, or its paper variant's.
+pub fn variant(shader: &str, paper: bool) -> String {
+    if paper {
+        format!("{shader}:PAPER")
+    } else {
+        shader.to_string()
     }
-    pass
 }
 
 pub struct Inject {
-    pipeline: Pipeline,
-    set: Set,
+    pass: Pass,
 }
 
 impl Inject {
     pub fn new(
         ctx: &Arc<Context>,
-        pool: &DescriptorPool,
+        scene: &SharedSet,
         volumes: &Volumes,
-        scene_layout: &SetLayout,
-        shadow_map: (vk::ImageView, vk::Sampler),
+        shadow_map: (&Image, &Sampler),
         paper: bool,
     ) -> VkResult<Inject> {
-        let mut descs = voxel_data_descs(volumes);
-        descs.push((4, Desc::Sampled(shadow_map.0, shadow_map.1)));
-        descs.push((5, Desc::StorageImage(volumes.radiance.view)));
-        if let Some(dir) = &volumes.emit_dir {
-            descs.push((6, Desc::StorageImage(dir.view)));
-        }
-        if let Some(small) = &volumes.small_emission {
-            descs.push((10, Desc::StorageImage(small.view)));
-        }
-        let set = pool.set(vk::ShaderStageFlags::COMPUTE, &descs)?;
-        let shader = if paper {
-            "inject_radiance.comp:PAPER"
-        } else {
-            "inject_radiance.comp"
-        };
-        let pipeline =
-            pipelines::compute(ctx, shader, &[scene_layout, &set.layout], 0, &Spec(vec![]))?;
-        Ok(Inject { pipeline, set })
+        let table = read_voxel_data(Bindings::new(), volumes)
+            .sampled("shadow_map", shadow_map.0, shadow_map.1)
+            .image("radiance", &volumes.radiance, Usage::Write)
+            .with(volumes.emit_dir.as_ref(), |t, d| {
+                t.image("emit_dir", d, Usage::Write)
+            })
+            .with(volumes.small_emission.as_ref(), |t, s| {
+                t.image("small_emission", s, Usage::Write)
+            });
+        let shader = variant("inject_radiance.comp", paper);
+        Ok(Inject {
+            pass: Pass::compute(ctx, &shader, &[scene], table, 0)?,
+        })
     }
 
     pub fn record(
@@ -67,24 +64,12 @@ impl Inject {
         g: &mut Graph,
         volumes: &Volumes,
         scene_set: vk::DescriptorSet,
-        shadow_map: &Image,
         name: &str,
     ) {
         let d = &ctx.device;
-        let n = volumes.grid.resolution;
-        let mut pass = read_voxel_data(g.pass(name), volumes)
-            .image(shadow_map, Access::ComputeSampled)
-            .image(&volumes.radiance, Access::ComputeStorageWrite);
-        if let Some(dir) = &volumes.emit_dir {
-            pass = pass.image(dir, Access::ComputeStorageWrite);
-        }
-        if let Some(small) = &volumes.small_emission {
-            pass = pass.image(small, Access::ComputeStorageWrite);
-        }
-        pass.record(|cmd| unsafe {
-            self.pipeline
-                .bind_compute(d, cmd, &[scene_set, self.set.raw]);
-            let groups = n.div_ceil(4);
+        let groups = volumes.grid.resolution.div_ceil(4);
+        self.pass.declare(g.pass(name), 0).record(|cmd| unsafe {
+            self.pass.bind(d, cmd, &[(0, scene_set)], 0);
             d.cmd_dispatch(cmd, groups, groups, groups);
         });
     }

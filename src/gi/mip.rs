@@ -2,135 +2,109 @@
 //! resolution, then each of their mip levels from the one before; beside them (not --paper),
 //! where their light goes.
 
+use super::inject::variant;
 use super::volumes::Volumes;
-use crate::render::pipelines::{self, Desc, DescriptorPool, Pipeline, Set, Spec};
-use crate::vk::{vk, Access, Context, Graph, VkResult};
+use crate::vk::{vk, Bindings, Context, Graph, Pass, Usage, VkResult};
 use std::sync::Arc;
 
+/// The directional volumes' names in the shaders, in the order of `Volumes::faces`.
+const FACES: [&str; 6] = ["nx", "px", "ny", "py", "nz", "pz"];
+
 pub struct Mip {
-    base: Pipeline,
-    base_set: Set,
-    volume: Option<Pipeline>,
-    /// One set per level from 1: reads level - 1, writes level.
-    level_sets: Vec<Set>,
+    base: Pass,
+    /// One instance per level from 1: reads level - 1, writes level.
+    levels: Option<Pass>,
 }
 
 impl Mip {
-    pub fn new(
-        ctx: &Arc<Context>,
-        pool: &DescriptorPool,
-        volumes: &Volumes,
-        paper: bool,
-    ) -> VkResult<Mip> {
-        let comp = vk::ShaderStageFlags::COMPUTE;
-        let mut descs = vec![(0, Desc::StorageImage(volumes.radiance.view))];
-        for (i, f) in volumes.faces.iter().enumerate() {
-            descs.push((1 + i as u32, Desc::StorageImage(f.level_view(0))));
+    pub fn new(ctx: &Arc<Context>, volumes: &Volumes, paper: bool) -> VkResult<Mip> {
+        let mut base = Bindings::new().image("radiance", &volumes.radiance, Usage::Read);
+        for (f, name) in volumes.faces.iter().zip(FACES) {
+            base = base.image_view(&format!("face_{name}"), f, f.level_view(0), Usage::Write);
         }
-        if let Some(dir) = &volumes.emit_dir {
-            descs.push((7, Desc::StorageImage(dir.view)));
-        }
-        if let Some(small) = &volumes.small_emission {
-            descs.push((10, Desc::StorageImage(small.view)));
-        }
-        if let Some(dir) = &volumes.light_dir {
-            descs.push((8, Desc::StorageImage(dir.level_view(0))));
-        }
-        if let Some(pos) = &volumes.light_pos {
-            descs.push((9, Desc::StorageImage(pos.level_view(0))));
-        }
-        let base_set = pool.set(comp, &descs)?;
-        let v = |s: &str| {
-            if paper {
-                format!("{s}:PAPER")
-            } else {
-                s.to_string()
-            }
-        };
-        let base = pipelines::compute(
-            ctx,
-            &v("aniso_mip_base.comp"),
-            &[&base_set.layout],
-            0,
-            &Spec(vec![]),
-        )?;
-        let levels = volumes.grid.mip_levels();
-        let mut level_sets = Vec::new();
-        for level in 1..levels {
-            let mut descs = Vec::new();
-            for (i, f) in volumes.faces.iter().enumerate() {
-                descs.push((i as u32, Desc::StorageImage(f.level_view(level - 1))));
-                descs.push((6 + i as u32, Desc::StorageImage(f.level_view(level))));
-            }
-            if let Some(dir) = &volumes.light_dir {
-                descs.push((12, Desc::StorageImage(dir.level_view(level - 1))));
-                descs.push((13, Desc::StorageImage(dir.level_view(level))));
-            }
-            if let Some(pos) = &volumes.light_pos {
-                descs.push((14, Desc::StorageImage(pos.level_view(level - 1))));
-                descs.push((15, Desc::StorageImage(pos.level_view(level))));
-            }
-            level_sets.push(pool.set(comp, &descs)?);
-        }
-        let volume = match level_sets.first() {
-            Some(s) => Some(pipelines::compute(
+        let base = base
+            .with(volumes.emit_dir.as_ref(), |t, d| {
+                t.image("emit_dir", d, Usage::Read)
+            })
+            .with(volumes.small_emission.as_ref(), |t, s| {
+                t.image("small_emission", s, Usage::Read)
+            })
+            .with(volumes.light_dir.as_ref(), |t, d| {
+                t.image_view("light_dir", d, d.level_view(0), Usage::Write)
+            })
+            .with(volumes.light_pos.as_ref(), |t, p| {
+                t.image_view("light_pos", p, p.level_view(0), Usage::Write)
+            });
+        let base = Pass::compute(ctx, &variant("aniso_mip_base.comp", paper), &[], base, 0)?;
+
+        let tables: Vec<Bindings> = (1..volumes.grid.mip_levels())
+            .map(|level| {
+                // Level - 1 read, level written: one image bound twice.
+                let pair = |t: Bindings, name: &str, img: &crate::vk::Image| {
+                    t.image_view(
+                        &format!("src_{name}"),
+                        img,
+                        img.level_view(level - 1),
+                        Usage::Read,
+                    )
+                    .image_view(
+                        &format!("dst_{name}"),
+                        img,
+                        img.level_view(level),
+                        Usage::Write,
+                    )
+                };
+                let mut t = Bindings::new();
+                for (f, name) in volumes.faces.iter().zip(FACES) {
+                    t = pair(t, name, f);
+                }
+                t.with(volumes.light_dir.as_ref(), |t, d| pair(t, "dir", d))
+                    .with(volumes.light_pos.as_ref(), |t, p| pair(t, "pos", p))
+            })
+            .collect();
+        let levels = if tables.is_empty() {
+            None
+        } else {
+            let shader = variant("aniso_mip_volume.comp", paper);
+            Some(Pass::new(
                 ctx,
-                &v("aniso_mip_volume.comp"),
-                &[&s.layout],
+                crate::vk::Program::Compute(&shader),
+                &[],
+                tables,
                 0,
-                &Spec(vec![]),
-            )?),
-            None => None,
+            )?)
         };
-        Ok(Mip {
-            base,
-            base_set,
-            volume,
-            level_sets,
-        })
+        Ok(Mip { base, levels })
     }
 
     /// The directional volumes' base level from the radiance volume.
     pub fn record_base(&self, ctx: &Context, g: &mut Graph, volumes: &Volumes, name: &str) {
-        let mut pass = g
-            .pass(name)
-            .image(&volumes.radiance, Access::ComputeStorageRead);
-        if let Some(dir) = &volumes.emit_dir {
-            pass = pass.image(dir, Access::ComputeStorageRead);
-        }
-        if let Some(small) = &volumes.small_emission {
-            pass = pass.image(small, Access::ComputeStorageRead);
-        }
-        for f in volumes.directional() {
-            pass = pass.image(f, Access::ComputeStorageWrite);
-        }
         let size = volumes.grid.aniso_resolution();
-        pass.record(|cmd| dispatch(ctx, cmd, &self.base, &self.base_set, size));
+        self.base
+            .declare(g.pass(name), 0)
+            .record(|cmd| dispatch(ctx, cmd, &self.base, 0, size));
     }
 
     /// Each mip level of the directional volumes from the one before (a pass per level).
     pub fn record_levels(&self, ctx: &Context, g: &mut Graph, volumes: &Volumes, name: &str) {
-        let Some(p) = &self.volume else {
+        let Some(p) = &self.levels else {
             return;
         };
         let m = volumes.grid.aniso_resolution();
-        for (i, set) in self.level_sets.iter().enumerate() {
-            let level = i as u32 + 1;
-            let mut pass = g.pass(name);
-            for f in volumes.directional() {
-                pass = pass.image(f, Access::ComputeStorageReadWrite);
-            }
+        for level in 1..volumes.grid.mip_levels() {
+            let instance = level as usize - 1;
             let size = (m >> level).max(1);
-            pass.record(|cmd| dispatch(ctx, cmd, p, set, size));
+            p.declare(g.pass(name), instance)
+                .record(|cmd| dispatch(ctx, cmd, p, instance, size));
         }
     }
 }
 
-/// Binds `p` with `set` and dispatches over a `size`^3 volume.
-fn dispatch(ctx: &Context, cmd: vk::CommandBuffer, p: &Pipeline, set: &Set, size: u32) {
+/// Binds instance `instance` of `p` and dispatches over a `size`^3 volume.
+fn dispatch(ctx: &Context, cmd: vk::CommandBuffer, p: &Pass, instance: usize, size: u32) {
     let groups = size.div_ceil(4);
     unsafe {
-        p.bind_compute(&ctx.device, cmd, &[set.raw]);
+        p.bind(&ctx.device, cmd, &[], instance);
         ctx.device.cmd_dispatch(cmd, groups, groups, groups);
     }
 }

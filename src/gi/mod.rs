@@ -13,17 +13,17 @@ mod voxelize;
 pub use readback::{NonFinite, VoxelDump};
 pub use volumes::{VolumeInfo, Volumes};
 
-use crate::render::pipelines::{DescriptorPool, SetLayout};
-use crate::render::GpuScene;
 use crate::scene::Aabb;
-use crate::vk::{vk, Context, Graph, Image, VkResult};
+use crate::vk::{
+    vk, Buffer, Context, Graph, Image, Pipeline, Sampler, SharedSet, VertexLayout, VkResult,
+};
 use glam::{Vec3, Vec4};
 use std::sync::Arc;
 
 pub use bounce::Bounce;
 pub use inject::Inject;
 pub use mip::Mip;
-pub use trace::{Trace, TraceMode};
+pub use trace::{FrameImages, Trace, TraceMode, GBUFFER_NAMES};
 pub use voxelize::{Voxelizer, EMITTER_LIGHT};
 
 /// The most light bounces `GiSettings::bounces` may ask for.
@@ -122,6 +122,172 @@ impl GiSettings {
         }
     }
 }
+
+/// A setting's value, by kind.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Value {
+    Count(u32),
+    Real(f32),
+    Switch(bool),
+}
+
+impl Value {
+    pub fn as_f64(self) -> f64 {
+        match self {
+            Value::Count(n) => n as f64,
+            Value::Real(x) => x as f64,
+            Value::Switch(b) => b as u32 as f64,
+        }
+    }
+    /// Whole numbers only (counts and switches).
+    pub fn integer(self) -> bool {
+        !matches!(self, Value::Real(_))
+    }
+    /// As a sweep's label writes it: switches as 0 or 1.
+    pub fn label(self) -> String {
+        match self {
+            Value::Count(n) => n.to_string(),
+            Value::Real(x) => x.to_string(),
+            Value::Switch(b) => (b as u32).to_string(),
+        }
+    }
+    /// As the results' columns write it: switches as true or false.
+    pub fn column(self) -> String {
+        match self {
+            Value::Count(n) => n.to_string(),
+            Value::Real(x) => x.to_string(),
+            Value::Switch(b) => b.to_string(),
+        }
+    }
+}
+
+/// One field of [`GiSettings`] as the bench sees it: the axis a sweep varies (`--sweep
+/// NAME=..`), the results' column, the range a sweep may ask for, and how to read and set it.
+pub struct Field {
+    pub axis: &'static str,
+    pub column: &'static str,
+    pub min: f64,
+    pub max: f64,
+    pub get: fn(&GiSettings) -> Value,
+    pub set: fn(&mut GiSettings, f64),
+}
+
+/// Every field of [`GiSettings`], in order: a new setting is its field, its line here, its
+/// uniform (if the shaders read it) and its command-line flag.
+pub const FIELDS: &[Field] = &[
+    Field {
+        axis: "voxels",
+        column: "voxels",
+        min: 4.0,
+        max: 1024.0,
+        get: |g| Value::Count(g.voxels),
+        set: |g, v| g.voxels = v as u32,
+    },
+    Field {
+        axis: "bounces",
+        column: "bounces",
+        min: 1.0,
+        max: MAX_BOUNCES as f64,
+        get: |g| Value::Count(g.bounces),
+        set: |g, v| g.bounces = v as u32,
+    },
+    Field {
+        axis: "paper",
+        column: "paper",
+        min: 0.0,
+        max: 1.0,
+        get: |g| Value::Switch(g.paper),
+        set: |g, v| g.paper = v != 0.0,
+    },
+    Field {
+        axis: "cones",
+        column: "cone_count",
+        min: 1.0,
+        max: 16.0,
+        get: |g| Value::Count(g.cone_count),
+        set: |g, v| g.cone_count = v as u32,
+    },
+    Field {
+        axis: "aperture",
+        column: "cone_aperture_deg",
+        min: 0.5,
+        max: 179.0,
+        get: |g| Value::Real(g.cone_aperture_deg),
+        set: |g, v| g.cone_aperture_deg = v as f32,
+    },
+    Field {
+        axis: "step",
+        column: "step_factor",
+        min: 0.05,
+        max: 4.0,
+        get: |g| Value::Real(g.step_factor),
+        set: |g, v| g.step_factor = v as f32,
+    },
+    Field {
+        axis: "max-distance",
+        column: "max_distance",
+        min: 0.01,
+        max: 2.0,
+        get: |g| Value::Real(g.max_distance),
+        set: |g, v| g.max_distance = v as f32,
+    },
+    Field {
+        axis: "start-offset",
+        column: "start_offset",
+        min: 0.0,
+        max: 16.0,
+        get: |g| Value::Real(g.start_offset),
+        set: |g, v| g.start_offset = v as f32,
+    },
+    Field {
+        axis: "ao-falloff",
+        column: "ao_falloff",
+        min: 0.0,
+        max: 100.0,
+        get: |g| Value::Real(g.ao_falloff),
+        set: |g, v| g.ao_falloff = v as f32,
+    },
+    Field {
+        axis: "voxel-shadows",
+        column: "voxel_shadows",
+        min: 0.0,
+        max: 1.0,
+        get: |g| Value::Switch(g.voxel_shadows),
+        set: |g, v| g.voxel_shadows = v != 0.0,
+    },
+    Field {
+        axis: "cone-shadows",
+        column: "cone_shadows",
+        min: 0.0,
+        max: 1.0,
+        get: |g| Value::Switch(g.cone_shadows),
+        set: |g, v| g.cone_shadows = v != 0.0,
+    },
+    Field {
+        axis: "lod-offset",
+        column: "lod_offset",
+        min: 0.0,
+        max: 4.0,
+        get: |g| Value::Real(g.lod_offset),
+        set: |g, v| g.lod_offset = v as f32,
+    },
+    Field {
+        axis: "tail",
+        column: "tail",
+        min: 0.0,
+        max: 1.0,
+        get: |g| Value::Switch(g.tail),
+        set: |g, v| g.tail = v != 0.0,
+    },
+    Field {
+        axis: "emitter-lights",
+        column: "emitter_lights",
+        min: 0.0,
+        max: 1.0,
+        get: |g| Value::Switch(g.emitter_lights),
+        set: |g, v| g.emitter_lights = v != 0.0,
+    },
+];
 
 /// What the RGBA16F radiance volumes are scaled by: 1, unless the brightest voxel could come
 /// near the half float's largest value (65504), e.g. a 1e6 W/sr light. The bound: a white voxel
@@ -329,18 +495,22 @@ pub struct Gi {
     pub radiance_scale: f32,
     /// What the next frame must redo (everything, on the first).
     pub dirty: Dirty,
-    _pool: DescriptorPool,
 }
 
 /// What `Gi::new` needs from the renderer.
 pub struct GiInputs<'a> {
-    pub scene_layout: &'a SetLayout,
-    pub material_layout: &'a SetLayout,
-    pub shadow_map: (vk::ImageView, vk::Sampler),
-    pub gbuffer: Vec<(vk::ImageView, vk::Sampler)>,
-    pub out: &'a Image,
-    /// The emitters injected as lights (their instances' emission stays out of the voxels).
-    pub emitter_lights: &'a [crate::render::emitter_lights::EmitterLight],
+    /// The scene's set (set 0: frame uniforms, materials, lights, shadow views).
+    pub scene: &'a SharedSet,
+    /// The materials' sets (set 1 of voxelization).
+    pub materials: &'a SharedSet,
+    pub shadow_map: (&'a Image, &'a Sampler),
+    pub frame: FrameImages<'a>,
+    /// The scene's vertices as voxelization reads them, and each draw's push constants.
+    pub vertices: VertexLayout<'a>,
+    pub draw_push_size: u32,
+    /// The emitters injected as lights: each one's instance (whose emission stays out of the
+    /// voxels) and its emission's brightest channel.
+    pub emitter_lights: &'a [(usize, f32)],
 }
 
 impl Gi {
@@ -358,76 +528,37 @@ impl Gi {
             .instances
             .iter()
             .enumerate()
-            .filter(|(i, _)| !inputs.emitter_lights.iter().any(|e| e.instance == *i))
+            .filter(|(i, _)| !inputs.emitter_lights.iter().any(|e| e.0 == *i))
             .filter_map(|(_, inst)| scene.primitives.get(inst.primitive as usize))
             .filter_map(|p| scene.materials.get(p.material as usize))
             .map(|m| m.emissive.max_element())
             .fold(0.0f32, f32::max);
         let emissive = max_emission > 0.0;
         let volumes = Volumes::new(ctx, grid, settings, emissive, dynamic)?;
-        let pool = DescriptorPool::new(
-            ctx,
-            &[
-                vk::DescriptorPoolSize {
-                    ty: vk::DescriptorType::STORAGE_BUFFER,
-                    descriptor_count: 64,
-                },
-                vk::DescriptorPoolSize {
-                    ty: vk::DescriptorType::STORAGE_IMAGE,
-                    descriptor_count: 32 + 12 * grid.mip_levels(),
-                },
-                vk::DescriptorPoolSize {
-                    ty: vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-                    descriptor_count: 64,
-                },
-            ],
-            16 + grid.mip_levels(),
-        )?;
         let paper = settings.paper;
+        let scene_set = inputs.scene;
         let voxelizer = Voxelizer::new(
             ctx,
-            &pool,
+            &[scene_set, inputs.materials],
             &volumes,
-            inputs.scene_layout,
-            inputs.material_layout,
+            inputs.vertices,
+            inputs.draw_push_size,
             paper,
         )?;
         let lighting = if light_voxels {
             Some((
-                Inject::new(
-                    ctx,
-                    &pool,
-                    &volumes,
-                    inputs.scene_layout,
-                    inputs.shadow_map,
-                    paper,
-                )?,
-                Mip::new(ctx, &pool, &volumes, paper)?,
+                Inject::new(ctx, scene_set, &volumes, inputs.shadow_map, paper)?,
+                Mip::new(ctx, &volumes, paper)?,
             ))
         } else {
             None
         };
         let bounce = if light_voxels && settings.bounces >= 2 {
-            Some(Bounce::new(
-                ctx,
-                &pool,
-                &volumes,
-                inputs.scene_layout,
-                paper,
-                settings.tail,
-            )?)
+            Some(Bounce::new(ctx, scene_set, &volumes, paper, settings.tail)?)
         } else {
             None
         };
-        let trace = Trace::new(
-            ctx,
-            &pool,
-            &volumes,
-            inputs.scene_layout,
-            &inputs.gbuffer,
-            inputs.out,
-            paper,
-        )?;
+        let trace = Trace::new(ctx, scene_set, &volumes, &inputs.frame, paper)?;
         Ok(Gi {
             cones: cone_set(settings.cone_count, settings.cone_aperture_deg, paper),
             settings: settings.clone(),
@@ -447,12 +578,11 @@ impl Gi {
                 let lights = inputs
                     .emitter_lights
                     .iter()
-                    .map(|e| e.emission.max_element())
+                    .map(|e| e.1)
                     .fold(max_emission, f32::max);
                 radiance_scale(scene, grid.voxel_size(), lights)
             },
             dirty: Dirty::ALL,
-            _pool: pool,
         })
     }
 
@@ -541,20 +671,16 @@ impl Gi {
                     input.draw_static
                 };
                 self.voxelizer
-                    .record_voxelize(ctx, g, v, input.gpu, dynamic, &name, draw)
+                    .record_voxelize(ctx, g, v, input.geometry, dynamic, &name, draw)
             }
-            Step::Inject { .. } => {
-                lighting()
-                    .0
-                    .record(ctx, g, v, input.scene_set, input.shadow_map, &name)
-            }
+            Step::Inject { .. } => lighting().0.record(ctx, g, v, input.scene_set, &name),
             Step::MipBase { .. } => lighting().1.record_base(ctx, g, v, &name),
             Step::MipLevels { .. } => lighting().1.record_levels(ctx, g, v, &name),
             Step::VoxelListClear => bounce().record_list_clear(ctx, g, &name),
             Step::VoxelList => bounce().record_list(ctx, g, v, input.scene_set, &name),
             Step::SumsClear { .. } => bounce().record_sums_clear(ctx, g, &name),
-            Step::Gather { .. } => bounce().record_gather(ctx, g, v, input.scene_set, &name),
-            Step::Add { last, .. } => bounce().record_add(ctx, g, v, input.scene_set, last, &name),
+            Step::Gather { .. } => bounce().record_gather(ctx, g, input.scene_set, &name),
+            Step::Add { last, .. } => bounce().record_add(ctx, g, input.scene_set, last, &name),
         }
     }
 
@@ -663,13 +789,13 @@ impl Step {
 
 /// What the voxel steps need from the renderer.
 pub struct StepInputs<'a> {
-    pub gpu: &'a GpuScene,
+    /// The scene's vertex and index buffers, which voxelization draws from.
+    pub geometry: (&'a Buffer, &'a Buffer),
     pub scene_set: vk::DescriptorSet,
-    pub shadow_map: &'a Image,
     /// Draws the static (or the dynamic) instances with the voxelization pipeline and the
     /// given push-constant flags.
-    pub draw_static: &'a dyn Fn(vk::CommandBuffer, &crate::render::pipelines::Pipeline, u32),
-    pub draw_dynamic: &'a dyn Fn(vk::CommandBuffer, &crate::render::pipelines::Pipeline, u32),
+    pub draw_static: &'a dyn Fn(vk::CommandBuffer, &Pipeline, u32),
+    pub draw_dynamic: &'a dyn Fn(vk::CommandBuffer, &Pipeline, u32),
 }
 
 #[cfg(test)]
@@ -718,6 +844,41 @@ mod tests {
             two_out < 0.15 && one_out > 0.3,
             "outside every cone: two rings {two_out}, one ring {one_out}"
         );
+    }
+
+    #[test]
+    fn every_setting_has_its_field_and_each_field_sets_its_setting() {
+        // Naming every field: a new one fails to compile here until it is counted.
+        let GiSettings {
+            voxels: _,
+            bounces: _,
+            paper: _,
+            cone_count: _,
+            cone_aperture_deg: _,
+            step_factor: _,
+            max_distance: _,
+            start_offset: _,
+            ao_falloff: _,
+            voxel_shadows: _,
+            cone_shadows: _,
+            lod_offset: _,
+            tail: _,
+            emitter_lights: _,
+        } = GiSettings::default();
+        assert_eq!(FIELDS.len(), 14, "a setting without its line in FIELDS");
+        for f in FIELDS {
+            let d = GiSettings::default();
+            let mut g = d.clone();
+            // A value in range and unlike the default's.
+            let v = if (f.get)(&d).as_f64() == f.max {
+                f.min
+            } else {
+                f.max
+            };
+            (f.set)(&mut g, v);
+            assert_eq!((f.get)(&g).as_f64() as f32, v as f32, "{}", f.axis);
+            assert_ne!(g, d, "{} sets nothing", f.axis);
+        }
     }
 
     #[test]

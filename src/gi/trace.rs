@@ -1,11 +1,10 @@
 //! Step 4: cone tracing per pixel (indirect diffuse, specular, ambient occlusion) added to the
 //! direct light, and the debug views of the volumes.
 
-use super::bounce::cone_set;
-use super::inject::{read_voxel_data, voxel_data_descs};
+use super::bounce::cone_volumes;
+use super::inject::{read_voxel_data, variant};
 use super::volumes::Volumes;
-use crate::render::pipelines::{self, Desc, DescriptorPool, Pipeline, Set, SetLayout, Spec};
-use crate::vk::{vk, Access, Context, Graph, Image, VkResult};
+use crate::vk::{vk, Bindings, Context, Graph, Image, Pass, SharedSet, Usage, VkResult};
 use std::sync::Arc;
 
 /// What the trace pass writes.
@@ -23,135 +22,109 @@ pub enum TraceMode {
     Directional = 14,
 }
 
-/// The trace set's frame-sized images: the G-buffer (bindings 0 to 4) and the output (5).
-fn frame_descs<'a>(
-    gbuffer: &[(vk::ImageView, vk::Sampler)],
-    out: &'a Image,
-) -> Vec<(u32, Desc<'a>)> {
-    let mut descs: Vec<(u32, Desc)> = gbuffer
+/// The G-buffer's images by their names in the shaders (glsl/cone_trace.comp,
+/// glsl/deferred_lighting.comp), in the order of the renderer's G-buffer.
+pub const GBUFFER_NAMES: [&str; 5] = [
+    "gb_position",
+    "gb_normals",
+    "gb_albedo",
+    "gb_emission",
+    "gb_specular",
+];
+
+/// What the trace reads of the frame: the G-buffer (each image with its sampler), and the
+/// radiance it adds to.
+pub struct FrameImages<'a> {
+    pub gbuffer: &'a [Image],
+    pub sampler: vk::Sampler,
+    pub out: &'a Image,
+}
+
+/// The trace's table: the frame's images and the volumes cones sample.
+fn trace_table(volumes: &Volumes, frame: &FrameImages) -> Bindings {
+    let table = frame
+        .gbuffer
         .iter()
-        .enumerate()
-        .map(|(i, &(v, s))| (i as u32, Desc::Sampled(v, s)))
-        .collect();
-    descs.push((5, Desc::StorageImage(out.view)));
-    descs
+        .zip(GBUFFER_NAMES)
+        .fold(Bindings::new(), |t, (img, name)| {
+            t.sampled_with(name, img, frame.sampler)
+        })
+        .image("radiance_out", frame.out, Usage::ReadWrite);
+    cone_volumes(table, volumes, true)
+}
+
+/// The voxel views' table: the voxels, the volumes and the image they write.
+fn view_table(volumes: &Volumes, out: &Image) -> Bindings {
+    let table = read_voxel_data(Bindings::new(), volumes).image("view_out", out, Usage::Write);
+    cone_volumes(table, volumes, true)
 }
 
 pub struct Trace {
-    trace: Pipeline,
-    trace_set: Set,
-    view: Pipeline,
-    view_set: Set,
-    cones: Set,
+    trace: Pass,
+    view: Pass,
 }
 
 impl Trace {
     pub fn new(
         ctx: &Arc<Context>,
-        pool: &DescriptorPool,
+        scene: &SharedSet,
         volumes: &Volumes,
-        scene_layout: &SetLayout,
-        gbuffer: &[(vk::ImageView, vk::Sampler)],
-        out: &Image,
+        frame: &FrameImages,
         paper: bool,
     ) -> VkResult<Trace> {
-        let comp = vk::ShaderStageFlags::COMPUTE;
-        let trace_set = pool.set(comp, &frame_descs(gbuffer, out))?;
-        let cones = cone_set(pool, volumes, true)?;
-        let v = |s: &str| {
-            if paper {
-                format!("{s}:PAPER")
-            } else {
-                s.to_string()
-            }
-        };
-        let trace = pipelines::compute(
+        let trace = Pass::compute(
             ctx,
-            &v("cone_trace.comp"),
-            &[scene_layout, &trace_set.layout, &cones.layout],
+            &variant("cone_trace.comp", paper),
+            &[scene],
+            trace_table(volumes, frame),
             4,
-            &Spec(vec![]),
         )?;
-        let mut descs = voxel_data_descs(volumes);
-        descs.push((5, Desc::StorageImage(out.view)));
-        let view_set = pool.set(comp, &descs)?;
-        let view = pipelines::compute(
+        let view = Pass::compute(
             ctx,
-            &v("voxel_view.comp"),
-            &[scene_layout, &view_set.layout, &cones.layout],
+            &variant("voxel_view.comp", paper),
+            &[scene],
+            view_table(volumes, frame.out),
             4,
-            &Spec(vec![]),
         )?;
-        Ok(Trace {
-            trace,
-            trace_set,
-            view,
-            view_set,
-            cones,
-        })
+        Ok(Trace { trace, view })
     }
 
     /// Points the passes at new G-buffer and output images (a resized frame). The sets must
     /// not be in use (the frames before have been waited for).
-    pub fn retarget(&self, ctx: &Context, gbuffer: &[(vk::ImageView, vk::Sampler)], out: &Image) {
-        pipelines::write_set(ctx, self.trace_set.raw, &frame_descs(gbuffer, out));
-        pipelines::write_set(ctx, self.view_set.raw, &[(5, Desc::StorageImage(out.view))]);
+    pub fn retarget(
+        &mut self,
+        ctx: &Context,
+        scene: &SharedSet,
+        volumes: &Volumes,
+        frame: &FrameImages,
+    ) -> VkResult<()> {
+        self.trace
+            .rebind(ctx, 0, trace_table(volumes, frame), &[scene])?;
+        self.view
+            .rebind(ctx, 0, view_table(volumes, frame.out), &[scene])
     }
 
-    #[allow(clippy::too_many_arguments)]
+    /// Cones per pixel (`mode` below 10), or a view of the voxels.
     pub fn record(
         &self,
         ctx: &Context,
         g: &mut Graph,
-        volumes: &Volumes,
         scene_set: vk::DescriptorSet,
-        gbuffer: &[Image],
-        out: &Image,
+        size: (u32, u32),
         mode: TraceMode,
         name: &str,
     ) {
         let d = &ctx.device;
-        let (w, h) = (out.width(), out.height());
         let debug = (mode as u32) >= 10;
-        let mut pass = if debug {
-            read_voxel_data(g.pass(name), volumes).image(out, Access::ComputeStorageWrite)
+        let (p, push) = if debug {
+            (&self.view, mode as u32 - 10)
         } else {
-            let mut p = g.pass(name).image(out, Access::ComputeStorageReadWrite);
-            for img in gbuffer {
-                p = p.image(img, Access::ComputeSampled);
-            }
-            p
+            (&self.trace, mode as u32)
         };
-        pass = pass.image(&volumes.radiance, Access::ComputeSampled);
-        if let Some(dir) = &volumes.emit_dir {
-            pass = pass.image(dir, Access::ComputeSampled);
-        }
-        for f in volumes.directional() {
-            pass = pass.image(f, Access::ComputeSampled);
-        }
-        let (p, set, push) = if debug {
-            (&self.view, &self.view_set, mode as u32 - 10)
-        } else {
-            (&self.trace, &self.trace_set, mode as u32)
-        };
-        pass.record(|cmd| unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, p.raw);
-            d.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::COMPUTE,
-                p.layout,
-                0,
-                &[scene_set, set.raw, self.cones.raw],
-                &[],
-            );
-            d.cmd_push_constants(
-                cmd,
-                p.layout,
-                vk::ShaderStageFlags::COMPUTE,
-                0,
-                &push.to_le_bytes(),
-            );
-            d.cmd_dispatch(cmd, w.div_ceil(8), h.div_ceil(8), 1);
+        p.declare(g.pass(name), 0).record(|cmd| unsafe {
+            p.bind(d, cmd, &[(0, scene_set)], 0);
+            p.pipeline.push(d, cmd, &push.to_le_bytes());
+            d.cmd_dispatch(cmd, size.0.div_ceil(8), size.1.div_ceil(8), 1);
         });
     }
 }

@@ -1,7 +1,7 @@
 //! The GPU memory of the voxel passes: only what the scene and the settings need.
 
 use super::{GiSettings, VoxelGrid};
-use crate::vk::{vk, Buffer, Context, Image, ImageDesc, Sampler, VkError, VkResult};
+use crate::vk::{vk, AddressTable, Buffer, Context, Image, ImageDesc, Sampler, VkError, VkResult};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
@@ -35,12 +35,12 @@ impl Sums {
     }
 
     /// In the order of a pass's address table (glsl/voxel_common.glsl: WORDS_*).
-    fn addresses(&self) -> [u64; 4] {
+    fn table(&self) -> [Option<&Buffer>; 4] {
         [
-            self.albedo.address(),
-            self.normal.address(),
-            self.spread.address(),
-            self.emission.as_ref().map_or(0, |b| b.address()),
+            Some(&self.albedo),
+            Some(&self.normal),
+            Some(&self.spread),
+            self.emission.as_ref(),
         ]
     }
 }
@@ -85,37 +85,26 @@ impl VoxelData {
         }
     }
 
-    /// The buffers the lighting passes and views read.
-    pub fn read_by_shaders(&self) -> Vec<&Buffer> {
-        match self {
-            VoxelData::Sums { .. } => {
-                let mut v = self.written_by(false);
-                v.extend(self.written_by(true));
-                v
-            }
-            VoxelData::Paper {
-                albedo,
-                normal,
-                emission,
-                ..
-            } => std::iter::once(albedo)
-                .chain([normal])
-                .chain(emission)
-                .collect(),
+    /// Every buffer of voxel words (what the lighting passes and views may read).
+    pub fn buffers(&self) -> Vec<&Buffer> {
+        let mut v = self.written_by(false);
+        if let VoxelData::Sums { .. } = self {
+            v.extend(self.written_by(true));
         }
+        v
     }
 
-    /// The address tables of the static and the dynamic pass (zeros where absent); --paper:
-    /// albedo, normal, emission, flag in the first (glsl/voxel_common.glsl: PAPER_*).
-    fn addresses(&self) -> [[u64; 4]; 2] {
-        let or_zero = |b: Option<&Buffer>| b.map_or(0, |b| b.address());
+    /// The buffers in the address tables of the static and the dynamic pass (none where
+    /// absent); --paper: albedo, normal, emission, flag in the first (glsl/voxel_common.glsl:
+    /// PAPER_*).
+    fn tables(&self) -> [[Option<&Buffer>; 4]; 2] {
         match self {
             VoxelData::Sums {
                 static_sums,
                 dynamic_sums,
             } => [
-                static_sums.addresses(),
-                dynamic_sums.as_ref().map_or([0; 4], |d| d.addresses()),
+                static_sums.table(),
+                dynamic_sums.as_ref().map_or([None; 4], |d| d.table()),
             ],
             VoxelData::Paper {
                 albedo,
@@ -123,13 +112,8 @@ impl VoxelData {
                 emission,
                 flag,
             } => [
-                [
-                    albedo.address(),
-                    normal.address(),
-                    or_zero(emission.as_ref()),
-                    or_zero(flag.as_ref()),
-                ],
-                [0; 4],
+                [Some(albedo), Some(normal), emission.as_ref(), flag.as_ref()],
+                [None; 4],
             ],
         }
     }
@@ -150,7 +134,7 @@ pub struct Volumes {
     /// and reach the words through (GL_EXT_buffer_reference): a 512^3 grid's sums are larger
     /// than a storage buffer's descriptor may span (maxStorageBufferRange: 128 MiB on
     /// lavapipe).
-    pub words: [Buffer; 2],
+    pub words: [AddressTable; 2],
     /// Outgoing radiance per voxel, premultiplied by opacity (RGBA16F; RGBA8 for --paper).
     pub radiance: Image,
     /// The direction each voxel sends its light (RGBA8 signed, xyz; length 1: one side only,
@@ -372,14 +356,10 @@ impl Volumes {
                 .border_color(vk::BorderColor::FLOAT_TRANSPARENT_BLACK)
                 .max_lod(vk::LOD_CLAMP_NONE),
         )?;
-        let table = |name: &str, addresses: [u64; 4]| {
-            let bytes: Vec<u8> = addresses.iter().flat_map(|a| a.to_le_bytes()).collect();
-            Buffer::with_data(ctx, name, &bytes, vk::BufferUsageFlags::STORAGE_BUFFER)
-        };
-        let [s, d] = data.addresses();
+        let [s, d] = data.tables();
         let words = [
-            table("static voxel word addresses", s)?,
-            table("dynamic voxel word addresses", d)?,
+            AddressTable::new(ctx, "static voxel word addresses", &s)?,
+            AddressTable::new(ctx, "dynamic voxel word addresses", &d)?,
         ];
         Ok(Volumes {
             grid,

@@ -2,11 +2,11 @@
 //! dynamic geometry is cleared and voxelized every frame while static voxels stay.
 
 use super::volumes::{Volumes, VoxelData};
-use crate::render::pipelines::{
-    self, Desc, DescriptorPool, GraphicsDesc, Pipeline, Set, SetLayout, Spec,
+use crate::vk::pipeline::area;
+use crate::vk::{
+    vk, Access, Bindings, Buffer, Context, Graph, GraphicsDesc, Pass, Pipeline, Program, SharedSet,
+    Usage, VertexLayout, VkResult,
 };
-use crate::render::GpuScene;
-use crate::vk::{vk, Access, Context, Graph, VkResult};
 use std::sync::Arc;
 
 /// Push-constant flag: the static pass (the paper's pass writes its flag volume then).
@@ -15,93 +15,88 @@ pub const STATIC_PASS: u32 = 2;
 pub const EMITTER_LIGHT: u32 = 4;
 
 pub struct Voxelizer {
-    pub pipeline: Pipeline,
-    static_target: Set,
-    dynamic_target: Option<Set>,
+    /// Two instances: the static pass's words, then the dynamic pass's (the paper's passes
+    /// share one set of volumes).
+    pub pass: Pass,
     /// PAPER: zeroes the dynamic voxels (where the flag is 0).
-    clear_dynamic: Option<(Pipeline, Set)>,
+    clear_dynamic: Option<Pass>,
 }
 
 impl Voxelizer {
+    /// `shared`: the scene's set and the materials' sets; `vertices`: the scene's positions,
+    /// normals and texture coordinates; `push_size`: each draw's push constants.
     pub fn new(
         ctx: &Arc<Context>,
-        pool: &DescriptorPool,
+        shared: &[&SharedSet],
         volumes: &Volumes,
-        scene_layout: &SetLayout,
-        material_layout: &SetLayout,
+        vertices: VertexLayout,
+        push_size: u32,
         paper: bool,
     ) -> VkResult<Voxelizer> {
-        let frag = vk::ShaderStageFlags::FRAGMENT;
-        // Each pass reaches its words through its table of addresses (binding 0).
-        let static_target = pool.set(frag, &[(0, Desc::Storage(&volumes.words[0]))])?;
-        let dynamic_target = match &volumes.data {
-            VoxelData::Sums {
-                dynamic_sums: Some(_),
-                ..
-            } => Some(pool.set(frag, &[(0, Desc::Storage(&volumes.words[1]))])?),
-            _ => None,
+        // Each pass reaches its words through its table of addresses; it writes them all.
+        let target = |dynamic: bool| {
+            // The default's dynamic table points nowhere without dynamic geometry (and that
+            // pass never runs then).
+            let words = match &volumes.data {
+                VoxelData::Sums { .. } if dynamic => &volumes.words[1],
+                _ => &volumes.words[0],
+            };
+            volumes
+                .data
+                .written_by(dynamic)
+                .into_iter()
+                .fold(Bindings::new().addresses("Target", words), |t, b| {
+                    t.reaches(b, Usage::ReadWrite)
+                })
         };
         let clear_dynamic = match &volumes.data {
-            VoxelData::Paper { flag: Some(_), .. } => {
-                let set = pool.set(
-                    vk::ShaderStageFlags::COMPUTE,
-                    &[(0, Desc::Storage(&volumes.words[0]))],
-                )?;
-                let p = pipelines::compute(
-                    ctx,
-                    "clear_dynamic.comp",
-                    &[&set.layout],
-                    4,
-                    &Spec(vec![]),
-                )?;
-                Some((p, set))
+            VoxelData::Paper {
+                albedo,
+                normal,
+                emission,
+                flag: Some(flag),
+            } => {
+                let table = [Some(albedo), Some(normal), emission.as_ref()]
+                    .into_iter()
+                    .flatten()
+                    .fold(
+                        Bindings::new().addresses("PaperWords", &volumes.words[0]),
+                        |t, b| t.reaches(b, Usage::ReadWrite),
+                    )
+                    .reaches(flag, Usage::Read);
+                Some(Pass::compute(ctx, "clear_dynamic.comp", &[], table, 4)?)
             }
             _ => None,
         };
-        let (geom, frag_shader) = if paper {
+        let (geom, frag) = if paper {
             ("voxelize.geom:PAPER", "voxelize.frag:PAPER")
         } else {
             ("voxelize.geom", "voxelize.frag")
         };
-        let pipeline = pipelines::graphics(
+        let program = Program::Graphics(GraphicsDesc {
+            name: "voxelize",
+            shaders: &[
+                (vk::ShaderStageFlags::VERTEX, "voxelize.vert"),
+                (vk::ShaderStageFlags::GEOMETRY, geom),
+                (vk::ShaderStageFlags::FRAGMENT, frag),
+            ],
+            vertices: Some(vertices),
+            color_formats: &[],
+            depth_format: None,
+            depth_bias: None,
+            cull: vk::CullModeFlags::NONE,
+        });
+        let pass = Pass::new(
             ctx,
-            &GraphicsDesc {
-                name: "voxelize",
-                shaders: &[
-                    (vk::ShaderStageFlags::VERTEX, "voxelize.vert"),
-                    (vk::ShaderStageFlags::GEOMETRY, geom),
-                    (vk::ShaderStageFlags::FRAGMENT, frag_shader),
-                ],
-                sets: &[scene_layout, material_layout, &static_target.layout],
-                push_size: crate::render::DRAW_PUSH_SIZE,
-                spec: Spec(vec![]),
-                vertex_input: &[0, 1, 2],
-                color_formats: &[],
-                depth_format: None,
-                depth_bias: None,
-                cull: vk::CullModeFlags::NONE,
-            },
+            program,
+            shared,
+            vec![target(false), target(true)],
+            push_size,
         )?;
         Ok(Voxelizer {
-            pipeline,
-            static_target,
-            dynamic_target,
+            pass,
             clear_dynamic,
         })
-    }
-
-    /// Accesses of the voxel data by a pass that writes it from the fragment stage.
-    fn declare<'g, 'a, 'r>(
-        pass: crate::vk::graph::PassBuilder<'g, 'a, 'r>,
-        volumes: &'r Volumes,
-        dynamic: bool,
-        access: Access,
-    ) -> crate::vk::graph::PassBuilder<'g, 'a, 'r> {
-        let mut pass = pass.buffer(&volumes.words[dynamic as usize], Access::GraphicsBufferRead);
-        for b in volumes.data.written_by(dynamic) {
-            pass = pass.buffer(b, access);
-        }
-        pass
     }
 
     /// Clears what the static (or, with `dynamic`, the dynamic) voxelization rebuilds (the
@@ -116,47 +111,12 @@ impl Voxelizer {
     ) {
         let d = &ctx.device;
         let n = volumes.grid.resolution;
-        match (&volumes.data, dynamic, &self.clear_dynamic) {
-            (
-                VoxelData::Paper {
-                    albedo,
-                    normal,
-                    emission,
-                    flag,
-                },
-                true,
-                Some((p, set)),
-            ) => {
-                let mut pass = g
-                    .pass(name)
-                    .buffer(&volumes.words[0], Access::ComputeStorageRead);
-                for b in [Some(albedo), Some(normal), emission.as_ref()]
-                    .into_iter()
-                    .flatten()
-                {
-                    pass = pass.buffer(b, Access::ComputeStorageReadWrite);
-                }
-                if let Some(f) = flag {
-                    pass = pass.buffer(f, Access::ComputeStorageRead);
-                }
-                pass.record(|cmd| unsafe {
-                    d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, p.raw);
-                    d.cmd_bind_descriptor_sets(
-                        cmd,
-                        vk::PipelineBindPoint::COMPUTE,
-                        p.layout,
-                        0,
-                        &[set.raw],
-                        &[],
-                    );
+        match (dynamic, &self.clear_dynamic) {
+            (true, Some(p)) => {
+                p.declare(g.pass(name), 0).record(|cmd| unsafe {
+                    p.bind(d, cmd, &[], 0);
                     let voxels = n * n * n;
-                    d.cmd_push_constants(
-                        cmd,
-                        p.layout,
-                        vk::ShaderStageFlags::COMPUTE,
-                        0,
-                        &voxels.to_le_bytes(),
-                    );
+                    p.pipeline.push(d, cmd, &voxels.to_le_bytes());
                     // In rows: 65535 groups is all a dimension must allow (162^3 voxels).
                     let groups = voxels.div_ceil(64);
                     d.cmd_dispatch(cmd, groups.min(4096), groups.div_ceil(4096), 1);
@@ -191,32 +151,21 @@ impl Voxelizer {
         ctx: &Context,
         g: &mut Graph,
         volumes: &Volumes,
-        gpu: &GpuScene,
+        geometry: (&Buffer, &Buffer),
         dynamic: bool,
         name: &str,
         draw: &dyn Fn(vk::CommandBuffer, &Pipeline, u32),
     ) {
         let d = &ctx.device;
         let n = volumes.grid.resolution;
-        let mut pass = Self::declare(
-            g.pass(name),
-            volumes,
-            dynamic,
-            Access::FragmentStorageReadWrite,
-        )
-        .buffer(&gpu.vertices, Access::VertexBuffer)
-        .buffer(&gpu.indices, Access::IndexBuffer);
-        for t in &gpu.textures {
-            pass = pass.image(t, Access::FragmentSampled);
-        }
-        let target = if dynamic {
-            self.dynamic_target.as_ref().unwrap_or(&self.static_target)
-        } else {
-            &self.static_target
-        };
+        let pass = self
+            .pass
+            .declare(g.pass(name), dynamic as usize)
+            .buffer(geometry.0, Access::VertexBuffer)
+            .buffer(geometry.1, Access::IndexBuffer);
         pass.record(|cmd| unsafe {
             let info = vk::RenderingInfo::default()
-                .render_area(pipelines::area(n, n))
+                .render_area(area(n, n))
                 .layer_count(1);
             d.cmd_begin_rendering(cmd, &info);
             // A plain viewport: the geometry shader already maps voxels to pixels.
@@ -232,17 +181,13 @@ impl Voxelizer {
                     max_depth: 1.0,
                 }],
             );
-            d.cmd_set_scissor(cmd, 0, &[pipelines::area(n, n)]);
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipeline.raw);
-            d.cmd_bind_descriptor_sets(
+            d.cmd_set_scissor(cmd, 0, &[area(n, n)]);
+            self.pass.bind(d, cmd, &[], dynamic as usize);
+            draw(
                 cmd,
-                vk::PipelineBindPoint::GRAPHICS,
-                self.pipeline.layout,
-                2,
-                &[target.raw],
-                &[],
+                &self.pass.pipeline,
+                if dynamic { 0 } else { STATIC_PASS },
             );
-            draw(cmd, &self.pipeline, if dynamic { 0 } else { STATIC_PASS });
             d.cmd_end_rendering(cmd);
         });
     }

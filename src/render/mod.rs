@@ -1,11 +1,18 @@
-//! The renderer: shadow maps, G-buffer and deferred lighting, recorded as declared passes.
+//! The renderer: shadow maps, G-buffer and deferred lighting, recorded as declared passes, and
+//! the voxel passes of crate::gi, composed by `Renderer`.
 
 pub mod emitter_lights;
+mod frame;
+mod gbuffer;
 pub mod gpu;
 mod gpu_scene;
-pub(crate) mod pipelines;
+mod instances;
+mod lighting;
 mod renderer;
+mod scene_set;
+mod shadow_maps;
 pub mod shadows;
 
 pub use gpu_scene::{mip_chain, GpuScene};
-pub use renderer::{Mode, RenderSettings, Renderer, DRAW_PUSH_SIZE};
+pub use instances::DRAW_PUSH_SIZE;
+pub use renderer::{Mode, RenderSettings, Renderer, Step};

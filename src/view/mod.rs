@@ -685,8 +685,8 @@ impl App {
         let exposure = self.exposure;
         let mut recorded = Ok(());
         let Live { display, renderer } = live;
-        renderer.render_with(false, &waits, &signals, &mut |g, radiance| {
-            recorded = display.record(g, radiance, &target, exposure, shot_path.is_some());
+        renderer.render_with(false, &waits, &signals, &mut |g| {
+            recorded = display.record(g, &target, exposure, shot_path.is_some());
         })?;
         recorded?;
         keep_recent_timings(renderer);

@@ -1,8 +1,8 @@
 //! The window's last passes: the display image (exposure, tone curve, sRGB, as `voxgi render`
 //! writes a PNG) and its copy into the acquired swapchain image, plus screenshots.
 
-use crate::render::pipelines::{self, Desc, DescriptorPool, Pipeline, Set, Spec};
-use crate::vk::{vk, Access, Buffer, Context, Graph, Image, ImageDesc, VkResult};
+use crate::vk::VkResult;
+use crate::vk::{vk, Access, Bindings, Buffer, Context, Graph, Image, ImageDesc, Pass, Usage};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
@@ -26,9 +26,7 @@ pub struct Target {
 
 pub struct Display {
     ctx: Arc<Context>,
-    pipeline: Pipeline,
-    set: Set,
-    _pool: DescriptorPool,
+    pass: Pass,
     image: Image,
     /// Host copy of the last screenshot asked for, and its width, height and byte order
     /// (true: B, G, R, A).
@@ -59,33 +57,14 @@ impl Display {
                 vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
             ),
         )?;
-        let pool = DescriptorPool::new(
-            ctx,
-            &[vk::DescriptorPoolSize {
-                ty: vk::DescriptorType::STORAGE_IMAGE,
-                descriptor_count: 2,
-            }],
-            1,
-        )?;
-        let set = pool.set(
-            vk::ShaderStageFlags::COMPUTE,
-            &[
-                (0, Desc::StorageImage(radiance.view)),
-                (1, Desc::StorageImage(image.view)),
-            ],
-        )?;
-        let pipeline = pipelines::compute(
-            ctx,
-            "display.comp",
-            &[&set.layout],
-            std::mem::size_of::<DisplayPush>() as u32,
-            &Spec(vec![]),
-        )?;
+        let table = Bindings::new()
+            .image("radiance", radiance, Usage::Read)
+            .image("display", &image, Usage::Write);
+        let push = std::mem::size_of::<DisplayPush>() as u32;
+        let pass = Pass::compute(ctx, "display.comp", &[], table, push)?;
         Ok(Display {
             ctx: ctx.clone(),
-            pipeline,
-            set,
-            _pool: pool,
+            pass,
             image,
             shot: None,
             shot_shape: (0, 0, false),
@@ -99,7 +78,6 @@ impl Display {
     pub fn record(
         &mut self,
         g: &mut Graph,
-        radiance: &Image,
         target: &Target,
         exposure: f32,
         screenshot: bool,
@@ -109,20 +87,13 @@ impl Display {
             scale: 2f32.powf(exposure),
             encode_srgb: (!target.encode_srgb) as u32,
         };
-        g.pass("display")
-            .image(radiance, Access::ComputeStorageRead)
-            .image(&self.image, Access::ComputeStorageWrite)
-            .record(|cmd| unsafe {
-                self.pipeline.bind_compute(d, cmd, &[self.set.raw]);
-                d.cmd_push_constants(
-                    cmd,
-                    self.pipeline.layout,
-                    vk::ShaderStageFlags::COMPUTE,
-                    0,
-                    crate::render::gpu::as_bytes(&[push]),
-                );
-                d.cmd_dispatch(cmd, self.width.div_ceil(8), self.height.div_ceil(8), 1);
-            });
+        let p = &self.pass;
+        p.declare(g.pass("display"), 0).record(|cmd| unsafe {
+            p.bind(d, cmd, &[], 0);
+            p.pipeline
+                .push(d, cmd, crate::render::gpu::as_bytes(&[push]));
+            d.cmd_dispatch(cmd, self.width.div_ceil(8), self.height.div_ceil(8), 1);
+        });
 
         if screenshot && self.shot.is_none() {
             let bytes = target.extent.width.max(self.width) as u64

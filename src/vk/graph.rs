@@ -275,11 +275,40 @@ impl ResourceStates {
     }
 }
 
-enum Res<'r> {
-    Image(&'r Image),
-    Buffer(&'r Buffer),
-    /// An image the graph does not own (a swapchain image), with the range it uses.
-    External(vk::Image, vk::ImageSubresourceRange),
+/// A resource as the graph tracks it: by its handle (and an image's range).
+#[derive(Clone, Copy)]
+pub enum Tracked {
+    Image(vk::Image, vk::ImageSubresourceRange),
+    Buffer(vk::Buffer),
+}
+
+impl Tracked {
+    /// All of an image.
+    pub fn image(image: &Image) -> Tracked {
+        Tracked::Image(image.raw, image.full_range())
+    }
+    fn raw(&self) -> u64 {
+        match self {
+            Tracked::Image(i, _) => vk::Handle::as_raw(*i),
+            Tracked::Buffer(b) => vk::Handle::as_raw(*b),
+        }
+    }
+}
+
+/// One resource, whatever its range.
+impl PartialEq for Tracked {
+    fn eq(&self, other: &Tracked) -> bool {
+        std::mem::discriminant(self) == std::mem::discriminant(other) && self.raw() == other.raw()
+    }
+}
+
+impl std::fmt::Debug for Tracked {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Tracked::Image(..) => write!(f, "Image({:#x})", self.raw()),
+            Tracked::Buffer(_) => write!(f, "Buffer({:#x})", self.raw()),
+        }
+    }
 }
 
 /// Records passes into one command buffer.
@@ -299,7 +328,7 @@ pub struct Graph<'a> {
 pub struct PassBuilder<'g, 'a, 'r> {
     graph: &'g mut Graph<'a>,
     name: &'r str,
-    uses: Vec<(Res<'r>, Access)>,
+    uses: Vec<(Tracked, Access)>,
     /// A pass (labelled and timed), or only the barriers its accesses need.
     is_pass: bool,
 }
@@ -350,12 +379,17 @@ impl<'a> Graph<'a> {
 }
 
 impl<'r> PassBuilder<'_, '_, 'r> {
-    pub fn image(mut self, image: &'r Image, access: Access) -> Self {
-        self.uses.push((Res::Image(image), access));
+    pub fn image(mut self, image: &Image, access: Access) -> Self {
+        self.uses.push((Tracked::image(image), access));
         self
     }
-    pub fn buffer(mut self, buffer: &'r Buffer, access: Access) -> Self {
-        self.uses.push((Res::Buffer(buffer), access));
+    pub fn buffer(mut self, buffer: &Buffer, access: Access) -> Self {
+        self.uses.push((Tracked::Buffer(buffer.raw), access));
+        self
+    }
+    /// A resource by its handle (a pass's declared accesses, vk::pass).
+    pub fn tracked(mut self, resource: Tracked, access: Access) -> Self {
+        self.uses.push((resource, access));
         self
     }
     /// An image owned elsewhere (a swapchain image), tracked by its handle like the others.
@@ -365,7 +399,7 @@ impl<'r> PassBuilder<'_, '_, 'r> {
         range: vk::ImageSubresourceRange,
         access: Access,
     ) -> Self {
-        self.uses.push((Res::External(image, range), access));
+        self.uses.push((Tracked::Image(image, range), access));
         self
     }
 
@@ -376,14 +410,9 @@ impl<'r> PassBuilder<'_, '_, 'r> {
         let mut image_barriers = Vec::new();
         let mut buffer_barriers = Vec::new();
         for (res, access) in &self.uses {
-            match res {
-                Res::Image(_) | Res::External(..) => {
-                    let (raw, range) = match res {
-                        Res::Image(img) => (img.raw, img.full_range()),
-                        Res::External(raw, range) => (*raw, *range),
-                        Res::Buffer(_) => unreachable!(),
-                    };
-                    let st = g.states.get(vk::Handle::as_raw(raw));
+            let st = g.states.get(res.raw());
+            match *res {
+                Tracked::Image(raw, range) => {
                     if let Some(b) = derive(st, *access, true) {
                         image_barriers.push(
                             vk::ImageMemoryBarrier2::default()
@@ -398,8 +427,7 @@ impl<'r> PassBuilder<'_, '_, 'r> {
                         );
                     }
                 }
-                Res::Buffer(buf) => {
-                    let st = g.states.get(vk::Handle::as_raw(buf.raw));
+                Tracked::Buffer(raw) => {
                     if let Some(b) = derive(st, *access, false) {
                         buffer_barriers.push(
                             vk::BufferMemoryBarrier2::default()
@@ -407,7 +435,7 @@ impl<'r> PassBuilder<'_, '_, 'r> {
                                 .src_access_mask(b.src_access)
                                 .dst_stage_mask(b.dst_stage)
                                 .dst_access_mask(b.dst_access)
-                                .buffer(buf.raw)
+                                .buffer(raw)
                                 .offset(0)
                                 .size(vk::WHOLE_SIZE),
                         );
@@ -418,7 +446,10 @@ impl<'r> PassBuilder<'_, '_, 'r> {
         let omit = g.omit_barriers_of.as_deref() == Some(self.name);
         *g.ctx.stats.recording.lock().unwrap() = Some(self.name.to_string());
         let label = CString::new(self.name).unwrap_or_default();
-        let labelled = self.is_pass.then_some(g.ctx.debug_device.as_ref()).flatten();
+        let labelled = self
+            .is_pass
+            .then_some(g.ctx.debug_device.as_ref())
+            .flatten();
         if self.is_pass {
             g.labels.push(self.name.to_string());
         }

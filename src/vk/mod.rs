@@ -1,13 +1,19 @@
 //! The Vulkan layer: context, RAII resources, passes with declared accesses, timings.
 
+mod commands;
 mod context;
 pub mod graph;
+pub mod pass;
+pub mod pipeline;
 pub mod reflect;
 mod resources;
 mod timing;
 
+pub use commands::CommandPool;
 pub use context::{Context, ContextDesc, DeviceInfo, MessageStats};
-pub use graph::{Access, Graph, ResourceStates};
+pub use graph::{Access, Graph, ResourceStates, Tracked};
+pub use pass::{AddressTable, Bindings, Pass, Program, SharedSet, Usage};
+pub use pipeline::{GraphicsDesc, Pipeline, VertexLayout};
 pub use resources::{Buffer, Image, ImageDesc, Sampler};
 pub use timing::PassTimer;
 
@@ -39,6 +45,10 @@ pub enum VkError {
     Request(String),
     #[error("shader {0} is not among the compiled shaders")]
     NoShader(String),
+    /// A pass or pipeline whose shaders and Rust side disagree (a binding, a type, a use, the
+    /// push constants): a bug in voxgi, caught when the pass is made.
+    #[error("{what}: {problem}")]
+    Interface { what: String, problem: String },
     #[error(
         "a {grid}^3 grid needs {} MiB for {what}; one buffer holds at most {} MiB here \
          (maxMemoryAllocationSize, and 2^31 words) and a 3D image at most {max_side} texels a \

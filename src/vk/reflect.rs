@@ -413,6 +413,17 @@ pub fn reflect(words: &[u32]) -> Result<Interface, String> {
     Ok(out)
 }
 
+/// Every compiled shader's interface, by name (reflected once).
+pub fn all_interfaces() -> &'static [(String, Interface)] {
+    static ALL: std::sync::OnceLock<Vec<(String, Interface)>> = std::sync::OnceLock::new();
+    ALL.get_or_init(|| {
+        crate::shaders::SPIRV
+            .iter()
+            .filter_map(|(name, _)| Some((name.to_string(), shader_interface(name).ok()?)))
+            .collect()
+    })
+}
+
 /// The reflected interface of a compiled shader ("file" or "file:VARIANT").
 pub fn shader_interface(name: &str) -> Result<Interface, String> {
     let words = crate::shaders::words(name).ok_or_else(|| format!("no shader {name}"))?;
@@ -479,6 +490,15 @@ mod tests {
         assert_eq!((view.offset, view.size), (64, 64));
         let cones = frame.members.iter().find(|m| m.name == "cones").unwrap();
         assert_eq!(cones.size, 16 * 16);
+    }
+
+    #[test]
+    fn every_compiled_shader_reflects() {
+        for (name, _) in crate::shaders::SPIRV {
+            let i = shader_interface(name).unwrap();
+            assert!(!i.stage.is_empty(), "{name}");
+        }
+        assert_eq!(all_interfaces().len(), crate::shaders::SPIRV.len());
     }
 
     #[test]

@@ -1,15 +1,32 @@
-//! Shader modules, descriptor-set layouts and pipelines, each freed by its owner's Drop.
+//! Shader modules, descriptor-set layouts, descriptor pools and pipelines, each freed by its
+//! owner's Drop. Pipelines are checked against their shaders' reflected interface when they
+//! are made: the push-constant range and every binding a shader uses must match the layout.
 
-use crate::scene::Vertex;
-use crate::vk::{vk, Context, VkError, VkResult};
+use super::reflect::{self, Interface};
+use super::{Check, Context, VkError, VkResult};
+use ash::vk;
 use std::sync::Arc;
 
-fn check<T>(r: Result<T, vk::Result>, call: &'static str) -> VkResult<T> {
-    r.map_err(|result| VkError::Call { call, result })
+/// A compiled shader ("file" or "file:VARIANT") and its reflected interface.
+pub struct Shader {
+    pub name: String,
+    pub words: Vec<u32>,
+    pub interface: Interface,
 }
 
-pub fn spirv(name: &str) -> VkResult<Vec<u32>> {
-    crate::shaders::words(name).ok_or_else(|| VkError::NoShader(name.into()))
+impl Shader {
+    pub fn load(name: &str) -> VkResult<Shader> {
+        let words = crate::shaders::words(name).ok_or_else(|| VkError::NoShader(name.into()))?;
+        let interface = reflect::reflect(&words).map_err(|problem| VkError::Interface {
+            what: name.into(),
+            problem,
+        })?;
+        Ok(Shader {
+            name: name.into(),
+            words,
+            interface,
+        })
+    }
 }
 
 struct Module<'a> {
@@ -18,13 +35,10 @@ struct Module<'a> {
 }
 
 impl<'a> Module<'a> {
-    fn new(ctx: &'a Context, name: &str) -> VkResult<Self> {
-        let code = spirv(name)?;
-        let info = vk::ShaderModuleCreateInfo::default().code(&code);
-        let raw = check(
-            unsafe { ctx.device.create_shader_module(&info, None) },
-            "vkCreateShaderModule",
-        )?;
+    fn new(ctx: &'a Context, shader: &Shader) -> VkResult<Self> {
+        let info = vk::ShaderModuleCreateInfo::default().code(&shader.words);
+        let raw = unsafe { ctx.device.create_shader_module(&info, None) }
+            .check("vkCreateShaderModule")?;
         Ok(Module { ctx, raw })
     }
 }
@@ -35,36 +49,48 @@ impl Drop for Module<'_> {
     }
 }
 
+/// One binding of a set layout, by its GLSL name.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct LayoutBinding {
+    pub binding: u32,
+    pub name: String,
+    pub ty: vk::DescriptorType,
+    pub stages: vk::ShaderStageFlags,
+}
+
+/// A descriptor-set layout that knows its bindings' names, so that a pipeline can check that
+/// its shaders find there what they declare.
 pub struct SetLayout {
     ctx: Arc<Context>,
     pub raw: vk::DescriptorSetLayout,
+    pub bindings: Vec<LayoutBinding>,
 }
 
 impl SetLayout {
-    /// (binding, type, count, stages) per binding.
-    pub fn new(
-        ctx: &Arc<Context>,
-        bindings: &[(u32, vk::DescriptorType, u32, vk::ShaderStageFlags)],
-    ) -> VkResult<Self> {
+    pub fn new(ctx: &Arc<Context>, bindings: Vec<LayoutBinding>) -> VkResult<Self> {
         let b: Vec<_> = bindings
             .iter()
-            .map(|&(binding, ty, count, stages)| {
+            .map(|b| {
                 vk::DescriptorSetLayoutBinding::default()
-                    .binding(binding)
-                    .descriptor_type(ty)
-                    .descriptor_count(count)
-                    .stage_flags(stages)
+                    .binding(b.binding)
+                    .descriptor_type(b.ty)
+                    .descriptor_count(1)
+                    .stage_flags(b.stages)
             })
             .collect();
         let info = vk::DescriptorSetLayoutCreateInfo::default().bindings(&b);
-        let raw = check(
-            unsafe { ctx.device.create_descriptor_set_layout(&info, None) },
-            "vkCreateDescriptorSetLayout",
-        )?;
+        let raw = unsafe { ctx.device.create_descriptor_set_layout(&info, None) }
+            .check("vkCreateDescriptorSetLayout")?;
         Ok(SetLayout {
             ctx: ctx.clone(),
             raw,
+            bindings,
         })
+    }
+
+    /// An empty layout, for a set index no shader of a pipeline uses.
+    pub fn empty(ctx: &Arc<Context>) -> VkResult<Self> {
+        SetLayout::new(ctx, Vec::new())
     }
 }
 
@@ -78,24 +104,30 @@ impl Drop for SetLayout {
     }
 }
 
+/// A descriptor pool sized for the sets of one owner.
 pub struct DescriptorPool {
     ctx: Arc<Context>,
     pub raw: vk::DescriptorPool,
 }
 
 impl DescriptorPool {
-    pub fn new(
-        ctx: &Arc<Context>,
-        sizes: &[vk::DescriptorPoolSize],
-        max_sets: u32,
-    ) -> VkResult<Self> {
+    /// Room for `sets` sets of the given layouts (each layout counted once per set of it).
+    pub fn for_layouts(ctx: &Arc<Context>, layouts: &[&SetLayout]) -> VkResult<Self> {
+        let mut sizes: Vec<vk::DescriptorPoolSize> = Vec::new();
+        for b in layouts.iter().flat_map(|l| &l.bindings) {
+            match sizes.iter_mut().find(|s| s.ty == b.ty) {
+                Some(s) => s.descriptor_count += 1,
+                None => sizes.push(vk::DescriptorPoolSize {
+                    ty: b.ty,
+                    descriptor_count: 1,
+                }),
+            }
+        }
         let info = vk::DescriptorPoolCreateInfo::default()
-            .pool_sizes(sizes)
-            .max_sets(max_sets);
-        let raw = check(
-            unsafe { ctx.device.create_descriptor_pool(&info, None) },
-            "vkCreateDescriptorPool",
-        )?;
+            .pool_sizes(&sizes)
+            .max_sets(layouts.len().max(1) as u32);
+        let raw = unsafe { ctx.device.create_descriptor_pool(&info, None) }
+            .check("vkCreateDescriptorPool")?;
         Ok(DescriptorPool {
             ctx: ctx.clone(),
             raw,
@@ -107,94 +139,8 @@ impl DescriptorPool {
         let info = vk::DescriptorSetAllocateInfo::default()
             .descriptor_pool(self.raw)
             .set_layouts(&layouts);
-        Ok(check(
-            unsafe { self.ctx.device.allocate_descriptor_sets(&info) },
-            "vkAllocateDescriptorSets",
-        )?[0])
-    }
-}
-
-/// One descriptor of a set, for `DescriptorPool::set`.
-pub enum Desc<'a> {
-    Uniform(&'a crate::vk::Buffer),
-    Storage(&'a crate::vk::Buffer),
-    /// A combined image sampler in SHADER_READ_ONLY_OPTIMAL.
-    Sampled(vk::ImageView, vk::Sampler),
-    /// A storage image in GENERAL.
-    StorageImage(vk::ImageView),
-}
-
-/// A descriptor set with the layout made for it.
-pub struct Set {
-    pub layout: SetLayout,
-    pub raw: vk::DescriptorSet,
-}
-
-impl Desc<'_> {
-    fn ty(&self) -> vk::DescriptorType {
-        match self {
-            Desc::Uniform(_) => vk::DescriptorType::UNIFORM_BUFFER,
-            Desc::Storage(_) => vk::DescriptorType::STORAGE_BUFFER,
-            Desc::Sampled(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
-            Desc::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
-        }
-    }
-}
-
-/// Writes descriptors into `set` (which no submitted work may be using).
-pub fn write_set(ctx: &Context, set: vk::DescriptorSet, descs: &[(u32, Desc)]) {
-    let buffers: Vec<[vk::DescriptorBufferInfo; 1]> = descs
-        .iter()
-        .map(|(_, d)| match d {
-            Desc::Uniform(b) | Desc::Storage(b) => [vk::DescriptorBufferInfo {
-                buffer: b.raw,
-                offset: 0,
-                range: vk::WHOLE_SIZE,
-            }],
-            _ => [vk::DescriptorBufferInfo::default()],
-        })
-        .collect();
-    let images: Vec<[vk::DescriptorImageInfo; 1]> = descs
-        .iter()
-        .map(|(_, d)| match d {
-            Desc::Sampled(view, sampler) => [vk::DescriptorImageInfo {
-                sampler: *sampler,
-                image_view: *view,
-                image_layout: vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL,
-            }],
-            Desc::StorageImage(view) => [vk::DescriptorImageInfo {
-                sampler: vk::Sampler::null(),
-                image_view: *view,
-                image_layout: vk::ImageLayout::GENERAL,
-            }],
-            _ => [vk::DescriptorImageInfo::default()],
-        })
-        .collect();
-    let writes: Vec<_> = descs
-        .iter()
-        .enumerate()
-        .map(|(i, (b, d))| {
-            let w = vk::WriteDescriptorSet::default()
-                .dst_set(set)
-                .dst_binding(*b)
-                .descriptor_type(d.ty());
-            match d {
-                Desc::Uniform(_) | Desc::Storage(_) => w.buffer_info(&buffers[i]),
-                _ => w.image_info(&images[i]),
-            }
-        })
-        .collect();
-    unsafe { ctx.device.update_descriptor_sets(&writes, &[]) };
-}
-
-impl DescriptorPool {
-    /// Makes a layout from the descriptors' kinds, allocates a set and writes it.
-    pub fn set(&self, stages: vk::ShaderStageFlags, descs: &[(u32, Desc)]) -> VkResult<Set> {
-        let bindings: Vec<_> = descs.iter().map(|(b, d)| (*b, d.ty(), 1, stages)).collect();
-        let layout = SetLayout::new(&self.ctx, &bindings)?;
-        let raw = self.allocate(&layout)?;
-        write_set(&self.ctx, raw, descs);
-        Ok(Set { layout, raw })
+        Ok(unsafe { self.ctx.device.allocate_descriptor_sets(&info) }
+            .check("vkAllocateDescriptorSets")?[0])
     }
 }
 
@@ -208,30 +154,40 @@ pub struct Pipeline {
     ctx: Arc<Context>,
     pub raw: vk::Pipeline,
     pub layout: vk::PipelineLayout,
+    pub bind_point: vk::PipelineBindPoint,
     /// The stages its push-constant range is visible to.
     pub push_stages: vk::ShaderStageFlags,
 }
 
 impl Pipeline {
-    /// Binds this compute pipeline and its descriptor sets from set 0, for a dispatch.
+    /// Binds this pipeline.
+    ///
+    /// # Safety
+    /// `cmd` is recording.
+    pub unsafe fn bind(&self, d: &ash::Device, cmd: vk::CommandBuffer) {
+        d.cmd_bind_pipeline(cmd, self.bind_point, self.raw);
+    }
+
+    /// Binds descriptor sets from set `first` on.
     ///
     /// # Safety
     /// `cmd` is recording and the sets match the pipeline's layout.
-    pub unsafe fn bind_compute(
+    pub unsafe fn bind_sets(
         &self,
         d: &ash::Device,
         cmd: vk::CommandBuffer,
+        first: u32,
         sets: &[vk::DescriptorSet],
     ) {
-        d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.raw);
-        d.cmd_bind_descriptor_sets(
-            cmd,
-            vk::PipelineBindPoint::COMPUTE,
-            self.layout,
-            0,
-            sets,
-            &[],
-        );
+        d.cmd_bind_descriptor_sets(cmd, self.bind_point, self.layout, first, sets, &[]);
+    }
+
+    /// Pushes constants to every stage of the range.
+    ///
+    /// # Safety
+    /// `cmd` is recording and `bytes` fits the pipeline's push-constant range.
+    pub unsafe fn push(&self, d: &ash::Device, cmd: vk::CommandBuffer, bytes: &[u8]) {
+        d.cmd_push_constants(cmd, self.layout, self.push_stages, 0, bytes);
     }
 }
 
@@ -242,6 +198,50 @@ impl Drop for Pipeline {
             self.ctx.device.destroy_pipeline_layout(self.layout, None);
         }
     }
+}
+
+/// Checks the shaders against the pipeline's layout: the push-constant block's size, and that
+/// each binding a shader uses is in the set layout of its index, under the same name and type.
+fn check_interface(what: &str, shaders: &[Shader], sets: &[&SetLayout], push: u32) -> VkResult<()> {
+    let err = |problem: String| VkError::Interface {
+        what: what.into(),
+        problem,
+    };
+    let declared = shaders
+        .iter()
+        .map(|s| s.interface.push_constants)
+        .max()
+        .unwrap_or(0);
+    if declared != push {
+        return Err(err(format!(
+            "its shaders' push constants take {declared} bytes, the pipeline pushes {push}"
+        )));
+    }
+    for s in shaders {
+        for b in &s.interface.bindings {
+            let found = sets
+                .get(b.set as usize)
+                .and_then(|l| l.bindings.iter().find(|l| l.binding == b.binding));
+            match found {
+                Some(l)
+                    if l.name == b.name && l.ty == b.ty && l.stages.contains(s.interface.stage) => {
+                }
+                Some(l) => {
+                    return Err(err(format!(
+                    "{} uses set {} binding {} as {:?} ({:?}), the layout has {:?} ({:?}, {:?})",
+                    s.name, b.set, b.binding, b.name, b.ty, l.name, l.ty, l.stages
+                )))
+                }
+                None => {
+                    return Err(err(format!(
+                        "{} uses set {} binding {} ({:?}), which the layout lacks",
+                        s.name, b.set, b.binding, b.name
+                    )))
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 fn pipeline_layout(
@@ -259,49 +259,24 @@ fn pipeline_layout(
     if push_size > 0 {
         info = info.push_constant_ranges(&ranges);
     }
-    check(
-        unsafe { ctx.device.create_pipeline_layout(&info, None) },
-        "vkCreatePipelineLayout",
-    )
+    unsafe { ctx.device.create_pipeline_layout(&info, None) }.check("vkCreatePipelineLayout")
 }
 
-/// Specialisation constants, all 32-bit, ids 0..n.
-pub struct Spec(pub Vec<u32>);
-
-impl Spec {
-    fn entries(&self) -> Vec<vk::SpecializationMapEntry> {
-        (0..self.0.len() as u32)
-            .map(|i| vk::SpecializationMapEntry {
-                constant_id: i,
-                offset: i * 4,
-                size: 4,
-            })
-            .collect()
-    }
-    fn data(&self) -> Vec<u8> {
-        self.0.iter().flat_map(|v| v.to_le_bytes()).collect()
-    }
-}
-
+/// A compute pipeline of `shader` over `sets` (by set index) pushing `push_size` bytes.
 pub fn compute(
     ctx: &Arc<Context>,
-    shader: &str,
+    shader: &Shader,
     sets: &[&SetLayout],
     push_size: u32,
-    spec: &Spec,
 ) -> VkResult<Pipeline> {
+    check_interface(&shader.name, std::slice::from_ref(shader), sets, push_size)?;
     let module = Module::new(ctx, shader)?;
-    let layout = pipeline_layout(ctx, sets, push_size, vk::ShaderStageFlags::COMPUTE)?;
-    let entries = spec.entries();
-    let data = spec.data();
-    let spec_info = vk::SpecializationInfo::default()
-        .map_entries(&entries)
-        .data(&data);
+    let stages = vk::ShaderStageFlags::COMPUTE;
+    let layout = pipeline_layout(ctx, sets, push_size, stages)?;
     let stage = vk::PipelineShaderStageCreateInfo::default()
-        .stage(vk::ShaderStageFlags::COMPUTE)
+        .stage(stages)
         .module(module.raw)
-        .name(c"main")
-        .specialization_info(&spec_info);
+        .name(c"main");
     let info = vk::ComputePipelineCreateInfo::default()
         .stage(stage)
         .layout(layout);
@@ -311,12 +286,13 @@ pub fn compute(
     };
     match raw {
         Ok(p) => {
-            ctx.set_name(p[0], shader);
+            ctx.set_name(p[0], &shader.name);
             Ok(Pipeline {
                 ctx: ctx.clone(),
                 raw: p[0],
                 layout,
-                push_stages: vk::ShaderStageFlags::COMPUTE,
+                bind_point: vk::PipelineBindPoint::COMPUTE,
+                push_stages: stages,
             })
         }
         Err((_, result)) => {
@@ -329,17 +305,21 @@ pub fn compute(
     }
 }
 
-/// What a raster pipeline needs; dynamic rendering, so no render-pass object.
+/// How vertices are laid out in the vertex buffer (binding 0).
+#[derive(Clone, Copy, Debug)]
+pub struct VertexLayout<'a> {
+    pub stride: u32,
+    /// (location, format, offset) of each attribute the vertex shader reads.
+    pub attributes: &'a [(u32, vk::Format, u32)],
+}
+
+/// What a raster pipeline draws with; dynamic rendering, so no render-pass object.
 pub struct GraphicsDesc<'a> {
     pub name: &'a str,
-    /// (stage, shader file) pairs.
+    /// (stage, shader) pairs, by the compiled shaders' names.
     pub shaders: &'a [(vk::ShaderStageFlags, &'a str)],
-    pub sets: &'a [&'a SetLayout],
-    pub push_size: u32,
-    pub spec: Spec,
-    /// Which scene vertex attributes the vertex shader reads (0 position, 1 normal, 2 uv,
-    /// 3 tangent); empty for none.
-    pub vertex_input: &'a [u32],
+    /// None: no vertex buffer (the vertex shader makes its own).
+    pub vertices: Option<VertexLayout<'a>>,
     pub color_formats: &'a [vk::Format],
     pub depth_format: Option<vk::Format>,
     /// Depth bias (constant, slope) for shadow maps.
@@ -347,22 +327,23 @@ pub struct GraphicsDesc<'a> {
     pub cull: vk::CullModeFlags,
 }
 
-pub fn graphics(ctx: &Arc<Context>, desc: &GraphicsDesc) -> VkResult<Pipeline> {
-    let modules = desc
-        .shaders
+pub fn graphics(
+    ctx: &Arc<Context>,
+    desc: &GraphicsDesc,
+    shaders: &[Shader],
+    sets: &[&SetLayout],
+    push_size: u32,
+) -> VkResult<Pipeline> {
+    check_interface(desc.name, shaders, sets, push_size)?;
+    let modules = shaders
         .iter()
-        .map(|(_, name)| Module::new(ctx, name))
+        .map(|s| Module::new(ctx, s))
         .collect::<VkResult<Vec<_>>>()?;
     let push_stages = desc
         .shaders
         .iter()
         .fold(vk::ShaderStageFlags::empty(), |a, (s, _)| a | *s);
-    let layout = pipeline_layout(ctx, desc.sets, desc.push_size, push_stages)?;
-    let entries = desc.spec.entries();
-    let data = desc.spec.data();
-    let spec_info = vk::SpecializationInfo::default()
-        .map_entries(&entries)
-        .data(&data);
+    let layout = pipeline_layout(ctx, sets, push_size, push_stages)?;
     let stages: Vec<_> = desc
         .shaders
         .iter()
@@ -372,39 +353,34 @@ pub fn graphics(ctx: &Arc<Context>, desc: &GraphicsDesc) -> VkResult<Pipeline> {
                 .stage(*stage)
                 .module(m.raw)
                 .name(c"main")
-                .specialization_info(&spec_info)
         })
         .collect();
 
-    let bindings = [vk::VertexInputBindingDescription {
-        binding: 0,
-        stride: std::mem::size_of::<Vertex>() as u32,
-        input_rate: vk::VertexInputRate::VERTEX,
-    }];
-    let attributes = [
-        (0, vk::Format::R32G32B32_SFLOAT, 0),
-        (1, vk::Format::R32G32B32_SFLOAT, 12),
-        (2, vk::Format::R32G32_SFLOAT, 24),
-        (3, vk::Format::R32G32B32A32_SFLOAT, 32),
-    ]
-    .into_iter()
-    .filter(|(location, _, _)| desc.vertex_input.contains(location))
-    .map(
-        |(location, format, offset)| vk::VertexInputAttributeDescription {
-            location,
+    let bindings: Vec<_> = desc
+        .vertices
+        .iter()
+        .map(|v| vk::VertexInputBindingDescription {
             binding: 0,
-            format,
-            offset,
-        },
-    )
-    .collect::<Vec<_>>();
-    let vertex_input = if !desc.vertex_input.is_empty() {
-        vk::PipelineVertexInputStateCreateInfo::default()
-            .vertex_binding_descriptions(&bindings)
-            .vertex_attribute_descriptions(&attributes)
-    } else {
-        vk::PipelineVertexInputStateCreateInfo::default()
-    };
+            stride: v.stride,
+            input_rate: vk::VertexInputRate::VERTEX,
+        })
+        .collect();
+    let attributes: Vec<_> = desc
+        .vertices
+        .iter()
+        .flat_map(|v| v.attributes)
+        .map(
+            |&(location, format, offset)| vk::VertexInputAttributeDescription {
+                location,
+                binding: 0,
+                format,
+                offset,
+            },
+        )
+        .collect();
+    let vertex_input = vk::PipelineVertexInputStateCreateInfo::default()
+        .vertex_binding_descriptions(&bindings)
+        .vertex_attribute_descriptions(&attributes);
     let input_assembly = vk::PipelineInputAssemblyStateCreateInfo::default()
         .topology(vk::PrimitiveTopology::TRIANGLE_LIST);
     let viewport = vk::PipelineViewportStateCreateInfo::default()
@@ -467,6 +443,7 @@ pub fn graphics(ctx: &Arc<Context>, desc: &GraphicsDesc) -> VkResult<Pipeline> {
                 ctx: ctx.clone(),
                 raw: p[0],
                 layout,
+                bind_point: vk::PipelineBindPoint::GRAPHICS,
                 push_stages,
             })
         }
@@ -490,13 +467,9 @@ pub fn set_viewport(ctx: &Context, cmd: vk::CommandBuffer, width: u32, height: u
         min_depth: 0.0,
         max_depth: 1.0,
     };
-    let scissor = vk::Rect2D {
-        offset: vk::Offset2D { x: 0, y: 0 },
-        extent: vk::Extent2D { width, height },
-    };
     unsafe {
         ctx.device.cmd_set_viewport(cmd, 0, &[viewport]);
-        ctx.device.cmd_set_scissor(cmd, 0, &[scissor]);
+        ctx.device.cmd_set_scissor(cmd, 0, &[area(width, height)]);
     }
 }
 

@@ -1,0 +1,158 @@
+//! The scene's instances as the passes draw them (each one's index range, material and world
+//! transform) and their motion: which node moves each, and whether it is voxelized with the
+//! dynamic geometry.
+
+use super::gpu::as_bytes;
+use super::gpu_scene::GpuScene;
+use crate::scene::{Aabb, Scene};
+use crate::vk::{vk, Pipeline, SharedSet, VertexLayout};
+use glam::Mat4;
+
+/// Each draw's push constants (glsl: the Draw blocks of gbuffer, shadow and voxelize).
+#[repr(C)]
+#[derive(Clone, Copy)]
+struct DrawPush {
+    model: Mat4,
+    material: u32,
+    /// G-buffer: bit 0 mirrored transform. Shadow: the shadow view. Voxelize: flags.
+    extra: u32,
+}
+
+/// Bytes of the per-draw push constants: up to the last member (the struct's size rounds up to
+/// the matrix's alignment, past the shaders' block).
+pub const DRAW_PUSH_SIZE: u32 = (std::mem::offset_of!(DrawPush, extra) + 4) as u32;
+
+/// The scene's vertex attributes (crate::scene::Vertex) by location.
+pub const POSITION: (u32, vk::Format, u32) = (0, vk::Format::R32G32B32_SFLOAT, 0);
+pub const NORMAL: (u32, vk::Format, u32) = (1, vk::Format::R32G32B32_SFLOAT, 12);
+pub const UV: (u32, vk::Format, u32) = (2, vk::Format::R32G32_SFLOAT, 24);
+pub const TANGENT: (u32, vk::Format, u32) = (3, vk::Format::R32G32B32A32_SFLOAT, 32);
+
+/// The scene's vertices with the given attributes.
+pub fn vertices(attributes: &[(u32, vk::Format, u32)]) -> VertexLayout<'_> {
+    VertexLayout {
+        stride: std::mem::size_of::<crate::scene::Vertex>() as u32,
+        attributes,
+    }
+}
+
+pub struct Instances {
+    /// Per instance: first index, index count, material.
+    draws: Vec<(u32, u32, u32)>,
+    /// World transform per instance (moving nodes edit these).
+    pub transforms: Vec<Mat4>,
+    /// Object-space bounds of each instance's primitive (which shadow views a move touches).
+    bounds: Vec<Aabb>,
+    /// Per instance: moved by a dynamic node (voxelized every frame).
+    pub dynamic: Vec<bool>,
+    /// The node of each instance.
+    nodes: Vec<usize>,
+}
+
+/// An instance a node move took elsewhere.
+pub struct Moved {
+    pub instance: usize,
+    /// Where it was and where it goes, in world space.
+    pub swept: Aabb,
+    pub dynamic: bool,
+}
+
+impl Instances {
+    /// The scene's instances; those of `dynamic_nodes` are voxelized every frame.
+    pub fn new(scene: &Scene, dynamic_nodes: &[usize]) -> Instances {
+        let primitive = |i: &crate::scene::Instance| &scene.primitives[i.primitive as usize];
+        Instances {
+            draws: scene
+                .instances
+                .iter()
+                .map(|i| {
+                    let p = primitive(i);
+                    (p.first_index, p.index_count, p.material)
+                })
+                .collect(),
+            transforms: scene.instances.iter().map(|i| i.world).collect(),
+            bounds: scene
+                .instances
+                .iter()
+                .map(|i| primitive(i).bounds)
+                .collect(),
+            dynamic: scene
+                .instances
+                .iter()
+                .map(|i| dynamic_nodes.contains(&i.node))
+                .collect(),
+            nodes: scene.instances.iter().map(|i| i.node).collect(),
+        }
+    }
+
+    pub fn any_dynamic(&self) -> bool {
+        self.dynamic.iter().any(|&d| d)
+    }
+
+    /// 1 where the instance's transform mirrors (its winding flips).
+    pub fn mirrored(&self, instance: usize) -> u32 {
+        self.transforms[instance].determinant().is_sign_negative() as u32
+    }
+
+    /// Moves every instance of a glTF node; an instance already there does not move.
+    pub fn move_node(&mut self, node: usize, world: Mat4) -> Vec<Moved> {
+        let mut moved = Vec::new();
+        for i in 0..self.nodes.len() {
+            if self.nodes[i] == node && self.transforms[i] != world {
+                let b = &self.bounds[i];
+                moved.push(Moved {
+                    instance: i,
+                    swept: b
+                        .transformed(&self.transforms[i])
+                        .union(&b.transformed(&world)),
+                    dynamic: self.dynamic[i],
+                });
+                self.transforms[i] = world;
+            }
+        }
+        moved
+    }
+
+    /// Draws the instances `include` accepts with `pipeline` (already bound), the scene set at
+    /// set 0 and each one's material set at set 1; `extra` is each draw's last push constant.
+    ///
+    /// # Safety
+    /// `cmd` is recording inside a rendering scope that `pipeline` fits.
+    #[allow(clippy::too_many_arguments)]
+    pub unsafe fn draw(
+        &self,
+        d: &ash::Device,
+        cmd: vk::CommandBuffer,
+        pipeline: &Pipeline,
+        gpu: &GpuScene,
+        scene_set: vk::DescriptorSet,
+        materials: &SharedSet,
+        extra: impl Fn(usize) -> u32,
+        include: impl Fn(usize) -> bool,
+    ) {
+        pipeline.bind(d, cmd);
+        pipeline.bind_sets(d, cmd, 0, &[scene_set]);
+        if self.draws.is_empty() {
+            return;
+        }
+        d.cmd_bind_vertex_buffers(cmd, 0, &[gpu.vertices.raw], &[0]);
+        d.cmd_bind_index_buffer(cmd, gpu.indices.raw, 0, vk::IndexType::UINT32);
+        let mut bound = u32::MAX;
+        for (i, &(first, count, material)) in self.draws.iter().enumerate() {
+            if !include(i) {
+                continue;
+            }
+            if material != bound {
+                pipeline.bind_sets(d, cmd, 1, &[materials.sets[material as usize]]);
+                bound = material;
+            }
+            let push = DrawPush {
+                model: self.transforms[i],
+                material,
+                extra: extra(i),
+            };
+            pipeline.push(d, cmd, &as_bytes(&[push])[..DRAW_PUSH_SIZE as usize]);
+            d.cmd_draw_indexed(cmd, count, 1, first, 0, 0);
+        }
+    }
+}
