@@ -76,9 +76,9 @@ void main() {
     imageStore(radiance, c, vec4(direct.rgb + bounce * frame.tuning.y, direct.a));
 }
 #else
-// Adds a workgroup's sum to the 64-bit word pair at k.
+// Adds a workgroup's sum, already in fixed point, to the 64-bit word pair at k.
 void add_fixed(uint k, float x) {
-    uint add = uint(x * REFLECTANCE_ONE + 0.5);
+    uint add = uint(x);
     uint before = atomicAdd(reflectance[k], add);
     if (before > 0xFFFFFFFFu - add) atomicAdd(reflectance[k + 1u], 1u);
 }
@@ -116,9 +116,11 @@ void main() {
         bounce *= frame.tuning.y;
         reflected[i] = uvec2(packHalf2x16(bounce.rg), packHalf2x16(vec2(bounce.b, side)));
     }
-    // The workgroup's sum, then one atomic add per word.
+    // The workgroup's sum, then one atomic add per word. Each voxel's share is rounded to the
+    // fixed point first: 64 whole numbers of at most 2^16 add up exactly in a float whatever
+    // its order, and the list's order (which voxels share a workgroup) changes from run to run.
     uint l = gl_LocalInvocationIndex;
-    partial[l] = mine;
+    partial[l] = floor(mine * REFLECTANCE_ONE + 0.5);
     barrier();
     for (uint s = 32u; s > 0u; s >>= 1u) {
         if (l < s) partial[l] += partial[l + s];
