@@ -1,228 +1,375 @@
-//! voxgi: the command line.
+//! voxgi: the command line (clap). Bad input is one error line on stderr and exit status 1;
+//! `voxgi help COMMAND` and `--help` print the options.
 
 use anyhow::{bail, Context as _, Result};
+use clap::{Args, Parser, Subcommand};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use voxgi::gi::GiSettings;
+use voxgi::gi::{GiSettings, MAX_BOUNCES};
 use voxgi::output::{self, RadianceImage};
 use voxgi::render::{Mode, RenderSettings, Renderer};
 use voxgi::scene::{self, Scene};
 use voxgi::vk::{Context, ContextDesc};
 
-const USAGE: &str = "\
-voxgi: real-time global illumination by deferred voxel shading, on Vulkan
+#[derive(Parser)]
+#[command(
+    name = "voxgi",
+    version,
+    about = "voxgi: real-time global illumination by deferred voxel shading, on Vulkan",
+    arg_required_else_help = true
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
 
-USAGE:
-  voxgi render [SCENE] [--out FILE] [--width W] [--height H] [--mode MODE] [--mip L]
-               [--voxels N] [--bounces N] [--paper] [--cones N] [--aperture DEG]
-               [--step F] [--voxel-shadows] [--cone-shadows] [--no-tail]
-               [--no-emitter-lights]
-               [--frames N] [--exposure EV] [--shadow-res N] [--sun EL,AZ[,E]]
-               [--spin NODE [--spin-speed DEG]] [--time T]
-               [--validate] [--timings] [--device NAME]
-  voxgi view [SCENE] [--width W] [--height H] [--mode MODE] [--voxels N] [--bounces N]
-             [--paper] [--exposure EV] [--sun EL,AZ[,E]] [--spin NODE [--spin-speed DEG]]
-             [--shadow-res N] [--no-vsync]
-             [--frames N] [--screenshot FILE.png] [--resize FRAME:WxH].. [--press FRAME:KEY]..
-             [--validate] [--timings] [--device NAME]
-  voxgi info SCENE [render options]
-  voxgi reference [SCENE] [--spp N] [--out FILE.exr] [--width W] [--height H] [--seed S]
-                  [--sun EL,AZ[,E]] [--bounces N]
-  voxgi compare A.exr REFERENCE.exr [--exposure EV]
-  voxgi hard-cases [NAME..] [--size N] [--voxels N] [--ref-spp N] [--bounces N] [--no-tail]
-                   [--ideal]
-                   [--out FILE.md]
-  voxgi bench SCENE [--sweep SPEC] [--out DIR] [--width W --height H] [--frames N]
-              [--warmup N] [--ref-spp N] [--sun EL,AZ[,E]] [--exposure EV] [--validate]
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to an image (EXR radiance or PNG display)
+    ///
+    /// Without a scene, the bundled Cornell box.
+    Render(RenderCmd),
+    /// The renderer in a window with a free camera
+    ///
+    /// Keys: press H, or see the README. The title shows the settings and per-pass times.
+    View(ViewCmd),
+    /// What a scene holds and what a render of it would run and allocate
+    Info(InfoCmd),
+    /// CPU path-traced ground truth (all cores)
+    Reference(ReferenceCmd),
+    /// relMSE, MAE, RMSE and FLIP of an image against a reference, as one JSON line
+    Compare(CompareCmd),
+    /// Run the hard cases and print their table
+    ///
+    /// Light leaks, density, precision, degenerate input, extreme lights, cones at the edges:
+    /// all of them or those named, each with --paper and the defaults, under validation.
+    /// Prints the markdown table of docs/hard-cases.md and fails when a default setting misses
+    /// its goal.
+    HardCases(HardCasesCmd),
+    /// Time a sweep of settings and measure each one's error against the reference
+    ///
+    /// Per-pass GPU medians and frame wall time over --frames after --warmup; writes DIR
+    /// results.csv, results.json, results.md and pareto.png.
+    Bench(BenchCmd),
+}
 
-  SCENE        a glTF 2.0 file (.gltf or .glb); render defaults to the bundled Cornell box
-  --out FILE   .exr: linear radiance (RGB float); .png: display image (default voxgi.png)
-  --width W, --height H   image size in pixels (default 512 x 512)
-  --mode MODE  full (default): direct + cone-traced indirect light; direct: punctual lights
-               with shadows, plus emission; indirect; ao; voxels-albedo, voxels-normal,
-               voxels-emission, voxels-radiance: the first voxel along each ray
-  --mip L      with voxels-radiance: the directional volumes at mip level L
-  --voxels N   voxels per side of the grid (default 64)
-  --bounces B  1: direct light in the voxels; 2 (default) to 8: plus B - 1 bounces between
-               voxels (each one more bounce pass and mipmap, run when a light or node moves)
-  --paper      the original's behaviour and constants (RGBA8 averages and volumes, 6 cones)
-  --cones N, --aperture DEG, --step F   diffuse cones per pixel (16), their aperture (36),
-               step as a fraction of the cone diameter (0.5)
-  --voxel-shadows         voxel visibility by tracing the voxels (else the shadow maps)
-  --cone-shadows          soft shadows: direct light shadowed by cones through the voxels
-  --no-tail    the last bounce does not add the bounces after it (by default it adds them as
-               a geometric series: the voxels' mean albedo times their closed share, at most
-               0.6, is each further bounce's share of the one before)
-  --no-emitter-lights     emitters smaller than a voxel stay voxel emission (by default up
-               to four, the most powerful, light the scene as point lights with shadow maps)
-  --frames N   frames to render (timings are medians over them; default 1, 5 with --timings)
-  --exposure EV           display exposure for .png, in stops (default 0)
-  --shadow-res N          shadow-map texels per side (default 2048)
-  --sun EL,AZ[,E]         add a white directional light from elevation EL and azimuth AZ
-                          (degrees; azimuth 0 is +Z, 90 is +X) with irradiance E W/m^2
-                          (default 3): for scenes that bring no lights of their own
-  --validate   Khronos validation with synchronization validation; any message fails the run
-  --timings    print each pass's median GPU time
-  --device NAME           use the Vulkan device whose name contains NAME
-  --spin NODE  turn the node named NODE about its vertical axis (voxelized every frame, apart
-               from the static geometry); glTF animations play
-  --spin-speed DEG        degrees per second of --spin (default 90)
-  --time T     render: the moving scene (animations, --spin) as it is T seconds in
-  view         the renderer in a window with a free camera (keys: press H, or see the
-               README); the title shows the settings and per-pass times
-  --no-vsync   view: present without waiting for the display (mailbox or immediate)
-  --frames N   view: render N frames, time advancing 1/60 s each, then exit
-  --screenshot FILE.png   view: after the last frame, save the window's image
-  --resize FRAME:WxH      view: ask for a new window size at frame FRAME (repeatable)
-  --press FRAME:KEY       view: press KEY at frame FRAME, release it at the next (repeatable;
-                          KEY as in the controls: a letter, a digit, [ ] - =, space, f12,
-                          optionally shift+KEY), for scripted runs and tests
-  reference    CPU path-traced ground truth (all cores; --spp default 64, --seed default 0);
-               with --bounces B only the light a tracer with B bounces models (render's
-               --bounces: B reflections of punctual lights' light besides the surface seen,
-               B - 1 of emitters'), the best such a tracer can do
-  hard-cases   runs the hard cases (light leaks, density, precision, degenerate input,
-               extreme lights, cones at the edges; all of them or those named), each with
-               --paper and the defaults at --voxels (default 64), --size (default 64)
-               pixels and --bounces (default 2; --no-tail: without the bounces not traced),
-               under validation; prints (and writes to --out) the markdown table of
-               docs/hard-cases.md; fails when a default setting misses its goal; --ideal
-               adds two columns, for the cases measured against the reference: the default
-               image without the tail, its relMSE against the reference path tracer limited
-               to the default column's bounces (reference --bounces), and that path
-               tracer's own score in place of the real-time image
-  compare      prints one JSON line: relMSE, MAE, RMSE (radiance) and FLIP (display images)
-  bench        times each setting of a sweep (per-pass GPU medians and frame wall time over
-               --frames, default 10, after --warmup, default 2) and measures its error
-               against the reference (--ref-spp, default 256; cached in DIR/cache by scene
-               content, size and spp); writes DIR (default bench/) results.csv, results.json,
-               results.md and pareto.png. --sweep SPEC (default: default):
-               SPEC := PART ('|' PART)*, the union of the parts; PART := PRESET | AXIS (';' AXIS)*
-               AXIS := NAME=V1,V2,..: the cartesian product of the axes over the defaults
-               presets: default (one axis at a time around the defaults: voxels 32..256 each
-               also with the paper's settings, cones 1..16, aperture 30..90, step 0.25..1,
-               bounces 1,2), tiny (32^3: default and paper). Axes: voxels, bounces, paper,
-               cones, aperture, step, max-distance, start-offset, ao-falloff, voxel-shadows,
-               cone-shadows, lod-offset, tail, emitter-lights.
-               Example: --sweep 'voxels=32,64;cones=4,6;paper=0,1'
-";
+/// `--bounces B`: 1 to MAX_BOUNCES.
+fn bounces_range() -> clap::builder::RangedI64ValueParser<u32> {
+    clap::value_parser!(u32).range(1..=MAX_BOUNCES as i64)
+}
+
+/// An image side: 1 to 16384 pixels.
+fn side_range() -> clap::builder::RangedI64ValueParser<u32> {
+    clap::value_parser!(u32).range(1..=16384)
+}
+
+#[derive(Args, Clone)]
+struct SizeOpts {
+    /// Image width in pixels
+    #[arg(long, default_value_t = 512, value_parser = side_range())]
+    width: u32,
+    /// Image height in pixels
+    #[arg(long, default_value_t = 512, value_parser = side_range())]
+    height: u32,
+}
+
+/// The voxel passes' settings.
+#[derive(Args, Clone)]
+struct GiOpts {
+    /// Voxels per side of the grid
+    #[arg(long, default_value_t = GiSettings::default().voxels,
+          value_parser = clap::value_parser!(u32).range(4..=1024))]
+    voxels: u32,
+    /// 1: direct light in the voxels; 2 (default) to 8: plus B - 1 bounces between voxels
+    /// (each one more bounce pass and mipmap, run when a light or node moves)
+    #[arg(long, value_name = "B", value_parser = bounces_range())]
+    bounces: Option<u32>,
+    /// The original's behaviour and constants (RGBA8 averages and volumes, 6 cones)
+    #[arg(long)]
+    paper: bool,
+    /// Diffuse cones per pixel (default 16)
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=16))]
+    cones: Option<u32>,
+    /// Aperture of the diffuse cones in degrees (default 36)
+    #[arg(long, value_name = "DEG", value_parser = aperture)]
+    aperture: Option<f32>,
+    /// Cone step as a fraction of the cone diameter (default 0.5)
+    #[arg(long, value_name = "F", value_parser = step)]
+    step: Option<f32>,
+    /// Voxel visibility by tracing the voxels (else the shadow maps)
+    #[arg(long)]
+    voxel_shadows: bool,
+    /// Soft shadows: direct light shadowed by cones through the voxels
+    #[arg(long)]
+    cone_shadows: bool,
+    /// The last bounce does not add the bounces after it (by default it adds them as a
+    /// geometric series: the voxels' mean albedo times their closed share, at most 0.6, is each
+    /// further bounce's share of the one before)
+    #[arg(long)]
+    no_tail: bool,
+    /// Emitters smaller than a voxel stay voxel emission (by default up to four, the most
+    /// powerful, light the scene as point lights with shadow maps)
+    #[arg(long)]
+    no_emitter_lights: bool,
+}
+
+fn aperture(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(a) if a > 0.5 && a < 179.0 => Ok(a),
+        _ => Err("must be between 0.5 and 179 degrees".into()),
+    }
+}
+
+fn step(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(f) if (0.05..=4.0).contains(&f) => Ok(f),
+        _ => Err("must be between 0.05 and 4".into()),
+    }
+}
+
+fn mode(s: &str) -> Result<Mode, String> {
+    s.parse()
+}
+
+/// What `render`, `view` and `info` share: the image, the mode and the voxel settings.
+#[derive(Args, Clone)]
+struct RenderOpts {
+    #[command(flatten)]
+    size: SizeOpts,
+    /// full: direct + cone-traced indirect light; direct: punctual lights with shadows, plus
+    /// emission; indirect; ao; voxels-albedo, voxels-normal, voxels-emission,
+    /// voxels-radiance: the first voxel along each ray
+    #[arg(long, default_value = "full", value_parser = mode)]
+    mode: Mode,
+    /// With --mode voxels-radiance: the directional volumes at mip level L
+    #[arg(long, value_name = "L")]
+    mip: Option<u32>,
+    /// Shadow-map texels per side
+    #[arg(long, default_value_t = 2048,
+          value_parser = clap::value_parser!(u32).range(16..=16384))]
+    shadow_res: u32,
+    /// Print each pass's median GPU time
+    #[arg(long)]
+    timings: bool,
+    #[command(flatten)]
+    gi: GiOpts,
+}
+
+#[derive(Args, Clone)]
+struct DeviceOpts {
+    /// Khronos validation with synchronization validation; any message fails the run
+    #[arg(long)]
+    validate: bool,
+    /// Use the Vulkan device whose name contains NAME
+    #[arg(long, value_name = "NAME")]
+    device: Option<String>,
+}
+
+#[derive(Args, Clone)]
+struct SunOpt {
+    /// Add a white directional light from elevation EL and azimuth AZ (degrees; azimuth 0 is
+    /// +Z, 90 is +X) with irradiance E W/m^2 (default 3): for scenes without lights
+    #[arg(long, value_name = "EL,AZ[,E]", value_parser = parse_sun)]
+    sun: Option<scene::Light>,
+}
+
+#[derive(Args, Clone)]
+struct SpinOpts {
+    /// Turn the node named NODE about its vertical axis (voxelized every frame, apart from the
+    /// static geometry); glTF animations play
+    #[arg(long, value_name = "NODE")]
+    spin: Option<String>,
+    /// Degrees per second of --spin (default 90)
+    #[arg(long, value_name = "DEG", requires = "spin")]
+    spin_speed: Option<f32>,
+}
+
+#[derive(Args)]
+struct RenderCmd {
+    /// A glTF 2.0 file (.gltf or .glb); default: the bundled Cornell box
+    scene: Option<PathBuf>,
+    /// .exr: linear radiance (RGB float); .png: display image
+    #[arg(long, default_value = "voxgi.png")]
+    out: PathBuf,
+    #[command(flatten)]
+    render: RenderOpts,
+    /// Frames to render (timings are medians over them; default 1, 5 with --timings)
+    #[arg(long, value_name = "N")]
+    frames: Option<u32>,
+    /// Display exposure for .png, in stops
+    #[arg(long, value_name = "EV", default_value_t = 0.0)]
+    exposure: f32,
+    #[command(flatten)]
+    sun: SunOpt,
+    #[command(flatten)]
+    spin: SpinOpts,
+    /// The moving scene (animations, --spin) as it is T seconds in
+    #[arg(long, value_name = "T")]
+    time: Option<f32>,
+    #[command(flatten)]
+    device: DeviceOpts,
+}
+
+#[derive(Args)]
+struct ViewCmd {
+    /// A glTF 2.0 file (.gltf or .glb); default: the bundled Cornell box
+    scene: Option<PathBuf>,
+    #[command(flatten)]
+    render: RenderOpts,
+    /// Display exposure in stops
+    #[arg(long, value_name = "EV", default_value_t = 0.0)]
+    exposure: f32,
+    #[command(flatten)]
+    sun: SunOpt,
+    #[command(flatten)]
+    spin: SpinOpts,
+    /// Present without waiting for the display (mailbox or immediate)
+    #[arg(long)]
+    no_vsync: bool,
+    /// Render N frames, time advancing 1/60 s each, then exit
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..))]
+    frames: Option<u32>,
+    /// After the last frame, save the window's image (with --frames)
+    #[arg(long, value_name = "FILE.png", requires = "frames")]
+    screenshot: Option<PathBuf>,
+    /// Ask for a new window size at frame FRAME (repeatable)
+    #[arg(long, value_name = "FRAME:WxH", value_parser = resize)]
+    resize: Vec<(u32, u32, u32)>,
+    /// Press KEY at frame FRAME, release it at the next (repeatable; KEY as in the controls: a
+    /// letter, a digit, [ ] - =, space, f12, optionally shift+KEY)
+    #[arg(long, value_name = "FRAME:KEY", value_parser = press)]
+    press: Vec<(u32, winit::keyboard::KeyCode, bool)>,
+    #[command(flatten)]
+    device: DeviceOpts,
+}
+
+fn resize(s: &str) -> Result<(u32, u32, u32), String> {
+    voxgi::view::parse_resize(s).map_err(|e| e.to_string())
+}
+
+fn press(s: &str) -> Result<(u32, winit::keyboard::KeyCode, bool), String> {
+    voxgi::view::parse_press(s).map_err(|e| e.to_string())
+}
+
+#[derive(Args)]
+struct InfoCmd {
+    /// A glTF 2.0 file (.gltf or .glb)
+    scene: Vec<PathBuf>,
+    #[command(flatten)]
+    render: RenderOpts,
+    #[command(flatten)]
+    device: DeviceOpts,
+}
+
+#[derive(Args)]
+struct ReferenceCmd {
+    /// A glTF 2.0 file (.gltf or .glb); default: the bundled Cornell box
+    scene: Option<PathBuf>,
+    /// Samples per pixel
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=1 << 20))]
+    spp: u32,
+    /// .exr: linear radiance (RGB float); .png: display image
+    #[arg(long, default_value = "reference.exr")]
+    out: PathBuf,
+    #[command(flatten)]
+    size: SizeOpts,
+    /// Seed of the random sequences
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    #[command(flatten)]
+    sun: SunOpt,
+    /// Only the light a tracer with B bounces models (render's --bounces: B reflections of
+    /// punctual lights' light besides the surface seen, B - 1 of emitters'), the best such a
+    /// tracer can do
+    #[arg(long, value_name = "B", value_parser = bounces_range())]
+    bounces: Option<u32>,
+    /// Display exposure for .png, in stops
+    #[arg(long, value_name = "EV", default_value_t = 0.0)]
+    exposure: f32,
+}
+
+#[derive(Args)]
+struct CompareCmd {
+    /// A.exr REFERENCE.exr
+    images: Vec<PathBuf>,
+    /// Display exposure of both images for FLIP, in stops
+    #[arg(long, value_name = "EV", default_value_t = 0.0)]
+    exposure: f32,
+}
+
+#[derive(Args)]
+struct HardCasesCmd {
+    /// Cases to run (default: all)
+    names: Vec<String>,
+    /// Image side in pixels
+    #[arg(long, default_value_t = 64, value_parser = side_range())]
+    size: u32,
+    /// Voxels per side of the grid
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(4..=1024))]
+    voxels: u32,
+    /// Samples per pixel of the references
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..))]
+    ref_spp: u32,
+    /// Light bounces of the default column
+    #[arg(long, value_name = "B", value_parser = bounces_range())]
+    bounces: Option<u32>,
+    /// The default column without the bounces not traced
+    #[arg(long)]
+    no_tail: bool,
+    /// Two more columns for the cases measured against the reference: the default image without
+    /// the tail against the path tracer limited to the same bounces, and that path tracer's own
+    /// score in place of the real-time image
+    #[arg(long)]
+    ideal: bool,
+    /// Also write the table here
+    #[arg(long, value_name = "FILE.md")]
+    out: Option<PathBuf>,
+    /// Use the Vulkan device whose name contains NAME
+    #[arg(long, value_name = "NAME")]
+    device: Option<String>,
+}
+
+#[derive(Args)]
+struct BenchCmd {
+    /// A glTF 2.0 file (.gltf or .glb)
+    scene: Vec<PathBuf>,
+    /// SPEC := PART ('|' PART)*, the union of the parts; PART := PRESET | AXIS (';' AXIS)*;
+    /// AXIS := NAME=V1,V2,..: the cartesian product of the axes over the defaults. Presets:
+    /// default (one axis at a time around the defaults), tiny (32^3: default and paper). Axes:
+    /// voxels, bounces, paper, cones, aperture, step, max-distance, start-offset, ao-falloff,
+    /// voxel-shadows, cone-shadows, lod-offset, tail, emitter-lights
+    #[arg(long, default_value = "default")]
+    sweep: String,
+    /// Where the results go
+    #[arg(long, value_name = "DIR", default_value = "bench")]
+    out: PathBuf,
+    /// Image width in pixels
+    #[arg(long, default_value_t = 512)]
+    width: u32,
+    /// Image height in pixels
+    #[arg(long, default_value_t = 512)]
+    height: u32,
+    /// Frames timed per setting
+    #[arg(long, default_value_t = 10)]
+    frames: u32,
+    /// Frames rendered before the timed ones
+    #[arg(long, default_value_t = 2)]
+    warmup: u32,
+    /// Samples per pixel of the reference (cached in DIR/cache by scene content, size and spp)
+    #[arg(long, default_value_t = 256)]
+    ref_spp: u32,
+    #[command(flatten)]
+    sun: SunOpt,
+    /// Display exposure of both images for FLIP, in stops
+    #[arg(long, value_name = "EV", default_value_t = 0.0)]
+    exposure: f32,
+    #[command(flatten)]
+    device: DeviceOpts,
+}
 
 /// The Cornell box generated into assets/ (see voxgi::scene::builder).
 fn default_scene() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/cornell-box.gltf")
-}
-
-struct Args {
-    positional: Vec<String>,
-    options: Vec<(String, Option<String>)>,
-}
-
-const FLAGS: &[&str] = &[
-    "--validate",
-    "--timings",
-    "--help",
-    "--paper",
-    "--voxel-shadows",
-    "--cone-shadows",
-    "--no-tail",
-    "--no-emitter-lights",
-    "--no-vsync",
-    "--ideal",
-];
-const VALUED: &[&str] = &[
-    "--out",
-    "--width",
-    "--height",
-    "--mode",
-    "--frames",
-    "--exposure",
-    "--shadow-res",
-    "--device",
-    "--sun",
-    "--mip",
-    "--voxels",
-    "--bounces",
-    "--cones",
-    "--aperture",
-    "--step",
-    "--spp",
-    "--seed",
-    "--sweep",
-    "--warmup",
-    "--ref-spp",
-    "--size",
-    "--spin",
-    "--time",
-    "--screenshot",
-    "--resize",
-    "--press",
-    "--spin-speed",
-];
-
-impl Args {
-    fn parse(args: &[String]) -> Result<Args> {
-        let mut positional = Vec::new();
-        let mut options = Vec::new();
-        let mut it = args.iter();
-        while let Some(a) = it.next() {
-            if a == "-h" {
-                options.push(("--help".to_string(), None));
-            } else if FLAGS.contains(&a.as_str()) {
-                options.push((a.clone(), None));
-            } else if VALUED.contains(&a.as_str()) {
-                let v = it.next().with_context(|| format!("{a} needs a value"))?;
-                options.push((a.clone(), Some(v.clone())));
-            } else if a.starts_with("--") {
-                bail!("unknown option {a}\n\n{USAGE}");
-            } else {
-                positional.push(a.clone());
-            }
-        }
-        Ok(Args {
-            positional,
-            options,
-        })
-    }
-    fn flag(&self, name: &str) -> bool {
-        self.options.iter().any(|(n, _)| n == name)
-    }
-    fn value(&self, name: &str) -> Option<&str> {
-        self.options
-            .iter()
-            .rev()
-            .find(|(n, _)| n == name)
-            .and_then(|(_, v)| v.as_deref())
-    }
-    /// Every value of a repeatable option, in order.
-    fn values(&self, name: &str) -> Vec<&str> {
-        self.options
-            .iter()
-            .filter(|(n, _)| n == name)
-            .filter_map(|(_, v)| v.as_deref())
-            .collect()
-    }
-    /// `--bounces B` if given, checked against the range every command allows.
-    fn bounces(&self) -> Result<Option<u32>> {
-        let Some(v) = self.value("--bounces") else {
-            return Ok(None);
-        };
-        match v.parse::<u32>() {
-            Ok(b) if (1..=voxgi::gi::MAX_BOUNCES).contains(&b) => Ok(Some(b)),
-            _ => bail!(
-                "--bounces must be 1 to {}, got {v:?}",
-                voxgi::gi::MAX_BOUNCES
-            ),
-        }
-    }
-
-    fn number<T: std::str::FromStr>(&self, name: &str, default: T) -> Result<T> {
-        match self.value(name) {
-            None => Ok(default),
-            Some(v) => v
-                .parse()
-                .map_err(|_| anyhow::anyhow!("{name} {v:?} is not a valid number")),
-        }
-    }
 }
 
 fn load_scene(path: &Path) -> Result<Scene> {
@@ -233,10 +380,10 @@ fn load_scene(path: &Path) -> Result<Scene> {
     Ok(scene)
 }
 
-fn context(args: &Args) -> Result<std::sync::Arc<Context>> {
+fn context(device: &DeviceOpts) -> Result<std::sync::Arc<Context>> {
     Ok(Context::new(&ContextDesc {
-        validate: args.flag("--validate"),
-        device: args.value("--device").map(String::from),
+        validate: device.validate,
+        device: device.device.clone(),
         ..Default::default()
     })?)
 }
@@ -250,19 +397,19 @@ fn check_validation(stats: &voxgi::vk::MessageStats, validating: bool) -> Result
 }
 
 /// `--sun EL,AZ[,E]`: a directional light shining from elevation EL, azimuth AZ.
-fn parse_sun(spec: &str) -> Result<scene::Light> {
+fn parse_sun(spec: &str) -> Result<scene::Light, String> {
     let v: Vec<f32> = spec
         .split(',')
         .map(|x| x.trim().parse::<f32>())
         .collect::<Result<_, _>>()
-        .map_err(|_| anyhow::anyhow!("--sun {spec:?}: expected EL,AZ[,E] in degrees and W/m^2"))?;
+        .map_err(|_| "expected EL,AZ[,E] in degrees and W/m^2".to_string())?;
     let (el, az, e) = match v.as_slice() {
         [el, az] => (*el, *az, 3.0),
         [el, az, e] => (*el, *az, *e),
-        _ => bail!("--sun {spec:?}: expected EL,AZ[,E]"),
+        _ => return Err("expected EL,AZ[,E]".into()),
     };
     if !(el.is_finite() && az.is_finite() && e.is_finite() && e >= 0.0) {
-        bail!("--sun {spec:?}: values must be finite and E >= 0");
+        return Err("values must be finite and E >= 0".into());
     }
     let (el, az) = (el.to_radians(), az.to_radians());
     let towards_sun = glam::Vec3::new(el.cos() * az.sin(), el.sin(), el.cos() * az.cos());
@@ -276,77 +423,44 @@ fn parse_sun(spec: &str) -> Result<scene::Light> {
     })
 }
 
-/// Image, mode and voxel settings from the command line.
-fn render_settings(args: &Args) -> Result<RenderSettings> {
-    let width: u32 = args.number("--width", 512)?;
-    let height: u32 = args.number("--height", 512)?;
-    if width == 0 || height == 0 || width > 16384 || height > 16384 {
-        bail!("image size {width}x{height} is out of range (1 to 16384)");
+impl GiOpts {
+    fn settings(&self) -> GiSettings {
+        let mut gi = if self.paper {
+            GiSettings::paper(self.voxels)
+        } else {
+            GiSettings {
+                voxels: self.voxels,
+                ..Default::default()
+            }
+        };
+        gi.bounces = self.bounces.unwrap_or(gi.bounces);
+        gi.cone_count = self.cones.unwrap_or(gi.cone_count);
+        gi.cone_aperture_deg = self.aperture.unwrap_or(gi.cone_aperture_deg);
+        gi.step_factor = self.step.unwrap_or(gi.step_factor);
+        gi.voxel_shadows = self.voxel_shadows;
+        gi.cone_shadows = self.cone_shadows;
+        gi.tail &= !self.no_tail;
+        gi.emitter_lights &= !self.no_emitter_lights;
+        gi
     }
-    let mode: Mode = args
-        .value("--mode")
-        .unwrap_or("full")
-        .parse()
-        .map_err(anyhow::Error::msg)?;
-    let shadow_resolution: u32 = args.number("--shadow-res", 2048)?;
-    if !(16..=16384).contains(&shadow_resolution) {
-        bail!("--shadow-res {shadow_resolution} is out of range (16 to 16384)");
-    }
-    let mip = args
-        .value("--mip")
-        .map(|_| args.number("--mip", 0u32))
-        .transpose()?;
-    if mip.is_some() && mode != Mode::VoxelsRadiance {
-        bail!("--mip goes with --mode voxels-radiance");
-    }
-    Ok(RenderSettings {
-        width,
-        height,
-        mode,
-        shadow_resolution,
-        timings: args.flag("--timings"),
-        gi: gi_settings(args)?,
-        mip,
-        ..Default::default()
-    })
 }
 
-/// The voxel passes' settings from the command line.
-fn gi_settings(args: &Args) -> Result<GiSettings> {
-    let voxels: u32 = args.number("--voxels", GiSettings::default().voxels)?;
-    if !(4..=1024).contains(&voxels) {
-        bail!("--voxels {voxels} is out of range (4 to 1024)");
-    }
-    let mut gi = if args.flag("--paper") {
-        GiSettings::paper(voxels)
-    } else {
-        GiSettings {
-            voxels,
-            ..Default::default()
+impl RenderOpts {
+    fn settings(&self) -> Result<RenderSettings> {
+        if self.mip.is_some() && self.mode != Mode::VoxelsRadiance {
+            bail!("--mip goes with --mode voxels-radiance");
         }
-    };
-    gi.bounces = args.bounces()?.unwrap_or(gi.bounces);
-    gi.cone_count = args.number("--cones", gi.cone_count)?;
-    if !(1..=16).contains(&gi.cone_count) {
-        bail!("--cones must be 1 to 16");
+        Ok(RenderSettings {
+            width: self.size.width,
+            height: self.size.height,
+            mode: self.mode,
+            shadow_resolution: self.shadow_res,
+            timings: self.timings,
+            gi: self.gi.settings(),
+            mip: self.mip,
+            ..Default::default()
+        })
     }
-    gi.cone_aperture_deg = args.number("--aperture", gi.cone_aperture_deg)?;
-    if !(gi.cone_aperture_deg > 0.5 && gi.cone_aperture_deg < 179.0) {
-        bail!("--aperture must be between 0.5 and 179 degrees");
-    }
-    gi.step_factor = args.number("--step", gi.step_factor)?;
-    if !(gi.step_factor >= 0.05 && gi.step_factor <= 4.0) {
-        bail!("--step must be between 0.05 and 4");
-    }
-    gi.voxel_shadows = args.flag("--voxel-shadows");
-    gi.cone_shadows = args.flag("--cone-shadows");
-    if args.flag("--no-tail") {
-        gi.tail = false;
-    }
-    if args.flag("--no-emitter-lights") {
-        gi.emitter_lights = false;
-    }
-    Ok(gi)
 }
 
 /// A scene with nothing to light it renders black: say so rather than leave a user guessing.
@@ -360,92 +474,60 @@ fn warn_if_unlit(scene: &Scene, path: &Path) {
     }
 }
 
-/// `--spin NODE` and `--time T`: what moves and when the image is taken.
-fn motion(args: &Args, scene: &Scene) -> Result<(scene::Motion, f32)> {
-    let mut spin = args
-        .value("--spin")
+/// `--spin NODE` and its speed: what moves.
+fn motion(spin: &SpinOpts, scene: &Scene) -> Result<scene::Motion> {
+    let mut s = spin
+        .spin
+        .as_ref()
         .map(|name| scene.spin(name))
         .transpose()
         .map_err(anyhow::Error::msg)?;
-    if let Some(s) = spin.as_mut() {
-        s.degrees_per_second = args.number("--spin-speed", s.degrees_per_second)?;
-        if !s.degrees_per_second.is_finite() || s.degrees_per_second.abs() > 36000.0 {
+    if let (Some(s), Some(speed)) = (s.as_mut(), spin.spin_speed) {
+        if !speed.is_finite() || speed.abs() > 36000.0 {
             bail!("--spin-speed must be a number of degrees per second, at most 36000");
         }
-    } else if args.value("--spin-speed").is_some() {
-        bail!("--spin-speed goes with --spin NODE");
+        s.degrees_per_second = speed;
     }
-    let time: f32 = args.number("--time", 0.0)?;
-    if !time.is_finite() || time < 0.0 {
-        bail!("--time {time} must be a finite number of seconds, 0 or more");
-    }
-    Ok((
-        scene::Motion {
-            spin,
-            animate: true,
-        },
-        time,
-    ))
+    Ok(scene::Motion {
+        spin: s,
+        animate: true,
+    })
+}
+
+/// The scene of a command, with `--sun` added.
+fn scene_with_sun(path: &Path, sun: &SunOpt) -> Result<Scene> {
+    let mut scene = load_scene(path)?;
+    scene.lights.extend(sun.sun.clone());
+    Ok(scene)
 }
 
 /// `voxgi view`: the renderer in a window.
-fn view(args: &Args) -> Result<()> {
-    let scene_path = match args.positional.as_slice() {
-        [] => default_scene(),
-        [s] => PathBuf::from(s),
-        more => bail!("view takes one scene, got {}", more.len()),
-    };
-    let screenshot = args.value("--screenshot").map(PathBuf::from);
-    if let Some(p) = &screenshot {
+fn view(c: ViewCmd) -> Result<()> {
+    let scene_path = c.scene.unwrap_or_else(default_scene);
+    if let Some(p) = &c.screenshot {
         let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("");
         if !ext.eq_ignore_ascii_case("png") {
             bail!("{}: screenshots are PNG files (.png)", p.display());
         }
     }
-    let frames = args
-        .value("--frames")
-        .map(|_| args.number::<u32>("--frames", 1))
-        .transpose()?;
-    if frames == Some(0) {
-        bail!("--frames must be 1 or more");
-    }
-    if screenshot.is_some() && frames.is_none() {
-        bail!("--screenshot goes with --frames N (F12 saves screenshots while flying)");
-    }
-    let resizes = args
-        .values("--resize")
-        .into_iter()
-        .map(voxgi::view::parse_resize)
-        .collect::<Result<Vec<_>>>()?;
-    let presses = args
-        .values("--press")
-        .into_iter()
-        .map(voxgi::view::parse_press)
-        .collect::<Result<Vec<_>>>()?;
-    let settings = render_settings(args)?;
-    let mut scene = load_scene(&scene_path)?;
-    if let Some(spec) = args.value("--sun") {
-        scene.lights.push(parse_sun(spec)?);
-    }
+    let settings = c.render.settings()?;
+    let scene = scene_with_sun(&scene_path, &c.sun)?;
     warn_if_unlit(&scene, &scene_path);
-    let (motion, _) = motion(args, &scene)?;
-    if args.value("--time").is_some() {
-        bail!("--time goes with render (the window's scene time runs from 0)");
-    }
-    let validating = args.flag("--validate");
+    let motion = motion(&c.spin, &scene)?;
+    let validating = c.device.validate;
     let report = voxgi::view::run(voxgi::view::ViewOptions {
         scene,
         settings,
-        vsync: !args.flag("--no-vsync"),
-        frames,
-        screenshot,
-        resizes,
-        presses,
+        vsync: !c.no_vsync,
+        frames: c.frames,
+        screenshot: c.screenshot,
+        resizes: c.resize,
+        presses: c.press,
         spin: motion.spin,
-        exposure: args.number("--exposure", 0.0)?,
-        timings: args.flag("--timings"),
+        exposure: c.exposure,
+        timings: c.render.timings,
         validate: validating,
-        device: args.value("--device").map(String::from),
+        device: c.device.device,
     })?;
     if let Some(ms) = report.median_frame_ms {
         eprintln!(
@@ -468,13 +550,9 @@ fn view(args: &Args) -> Result<()> {
     Ok(())
 }
 
-fn render(args: &Args) -> Result<()> {
-    let scene_path = match args.positional.as_slice() {
-        [] => default_scene(),
-        [s] => PathBuf::from(s),
-        more => bail!("render takes one scene, got {}", more.len()),
-    };
-    let out = PathBuf::from(args.value("--out").unwrap_or("voxgi.png"));
+fn render(c: RenderCmd) -> Result<()> {
+    let scene_path = c.scene.unwrap_or_else(default_scene);
+    let out = c.out;
     let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("");
     if !ext.eq_ignore_ascii_case("exr") && !ext.eq_ignore_ascii_case("png") {
         bail!(
@@ -482,20 +560,19 @@ fn render(args: &Args) -> Result<()> {
             out.display()
         );
     }
-    let settings = render_settings(args)?;
+    let mut settings = c.render.settings()?;
     let (width, height, timings) = (settings.width, settings.height, settings.timings);
-    let frames: u32 = args.number("--frames", if timings { 5 } else { 1 })?.max(1);
-    let exposure: f32 = args.number("--exposure", 0.0)?;
-
-    let mut scene = load_scene(&scene_path)?;
-    if let Some(spec) = args.value("--sun") {
-        scene.lights.push(parse_sun(spec)?);
+    let frames = c.frames.unwrap_or(if timings { 5 } else { 1 }).max(1);
+    let time = c.time.unwrap_or(0.0);
+    if !time.is_finite() || time < 0.0 {
+        bail!("--time {time} must be a finite number of seconds, 0 or more");
     }
+
+    let mut scene = scene_with_sun(&scene_path, &c.sun)?;
     warn_if_unlit(&scene, &scene_path);
-    let (motion, time) = motion(args, &scene)?;
-    let mut settings = settings;
+    let motion = motion(&c.spin, &scene)?;
     settings.dynamic_nodes = motion.prepare(&mut scene);
-    let ctx = context(args)?;
+    let ctx = context(&c.device)?;
     let stats = ctx.stats.clone();
     let validating = ctx.validating;
     eprintln!("device: {}", ctx.device_info);
@@ -532,16 +609,17 @@ fn render(args: &Args) -> Result<()> {
     if image.has_non_finite() {
         bail!("the rendered image has NaN or Inf pixels; nothing written");
     }
-    output::save(&image, &out, exposure)?;
+    output::save(&image, &out, c.exposure)?;
     eprintln!("wrote {}", out.display());
     Ok(())
 }
 
-fn info(args: &Args) -> Result<()> {
-    let [scene_path] = args.positional.as_slice() else {
-        bail!("info takes one scene\n\n{USAGE}");
+fn info(c: InfoCmd) -> Result<()> {
+    let scene_path = match c.scene.as_slice() {
+        [s] => s.clone(),
+        _ => bail!("info takes one scene (voxgi help info)"),
     };
-    let scene = load_scene(Path::new(scene_path))?;
+    let scene = load_scene(&scene_path)?;
     println!("scene      {}", scene.source.display());
     println!("triangles  {}", scene.triangle_count());
     println!(
@@ -587,20 +665,20 @@ fn info(args: &Args) -> Result<()> {
             scene.bounds.max.to_array()
         );
     }
-    let c = &scene.camera;
+    let cam = &scene.camera;
     println!(
         "camera     {} at {:?}, yfov {:.1} deg, near {} far {}",
-        if c.is_default {
+        if cam.is_default {
             "default".to_string()
         } else {
-            format!("{:?}", c.name.as_deref().unwrap_or("unnamed"))
+            format!("{:?}", cam.name.as_deref().unwrap_or("unnamed"))
         },
-        c.eye().to_array(),
-        c.yfov.to_degrees(),
-        c.znear,
-        c.zfar
+        cam.eye().to_array(),
+        cam.yfov.to_degrees(),
+        cam.znear,
+        cam.zfar
     );
-    let ctx = match context(args) {
+    let ctx = match context(&c.device) {
         Ok(ctx) => ctx,
         Err(e) => {
             println!("device     none usable: {e}");
@@ -609,7 +687,7 @@ fn info(args: &Args) -> Result<()> {
     };
     println!("device     {}", ctx.device_info);
     // What a render with these options would run and allocate.
-    let settings = render_settings(args)?;
+    let settings = c.render.settings()?;
     let mode = settings.mode;
     let renderer = Renderer::new(&ctx, &scene, settings)?;
     println!(
@@ -668,38 +746,24 @@ fn info(args: &Args) -> Result<()> {
 }
 
 /// `voxgi reference`: the CPU path tracer (src/reference) on the same scene `render` builds.
-fn reference(args: &Args) -> Result<()> {
-    let scene_path = match args.positional.as_slice() {
-        [] => default_scene(),
-        [s] => PathBuf::from(s),
-        more => bail!("reference takes one scene, got {}", more.len()),
-    };
-    let out = PathBuf::from(args.value("--out").unwrap_or("reference.exr"));
+fn reference(c: ReferenceCmd) -> Result<()> {
+    let scene_path = c.scene.clone().unwrap_or_else(default_scene);
+    let out = c.out;
     let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("");
     if !ext.eq_ignore_ascii_case("exr") && !ext.eq_ignore_ascii_case("png") {
         bail!("{}: unsupported output format (use .exr)", out.display());
     }
     let settings = voxgi::reference::ReferenceSettings {
-        width: args.number("--width", 512)?,
-        height: args.number("--height", 512)?,
-        spp: args.number("--spp", 64)?,
-        seed: args.number("--seed", 0)?,
-        bounces: args.bounces()?,
+        width: c.size.width,
+        height: c.size.height,
+        spp: c.spp,
+        seed: c.seed,
+        bounces: c.bounces,
         progress: true,
         ..Default::default()
     };
     let (w, h, spp) = (settings.width, settings.height, settings.spp);
-    let exposure: f32 = args.number("--exposure", 0.0)?;
-    if w == 0 || h == 0 || w > 16384 || h > 16384 {
-        bail!("image size {w}x{h} is out of range (1 to 16384)");
-    }
-    if !(1..=1 << 20).contains(&spp) {
-        bail!("--spp {spp} is out of range (1 to 1048576)");
-    }
-    let mut scene = load_scene(&scene_path)?;
-    if let Some(spec) = args.value("--sun") {
-        scene.lights.push(parse_sun(spec)?);
-    }
+    let scene = scene_with_sun(&scene_path, &c.sun)?;
     if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.is_emissive()) {
         eprintln!(
             "warning: {}: no lights and no emission; the image is black",
@@ -710,7 +774,7 @@ fn reference(args: &Args) -> Result<()> {
     if r.bad_samples > 0 {
         eprintln!("warning: {} NaN/Inf samples were dropped", r.bad_samples);
     }
-    output::save(&r.image, &out, exposure)?;
+    output::save(&r.image, &out, c.exposure)?;
     eprintln!(
         "wrote {} ({w}x{h}, {spp} spp, {:.2} s)",
         out.display(),
@@ -720,67 +784,58 @@ fn reference(args: &Args) -> Result<()> {
 }
 
 /// `voxgi compare A B`: B is the reference.
-fn compare(args: &Args) -> Result<()> {
-    let [pa, pb] = args.positional.as_slice() else {
-        bail!("compare takes two images, A.exr and REFERENCE.exr\n\n{USAGE}");
+fn compare(c: CompareCmd) -> Result<()> {
+    let [pa, pb] = c.images.as_slice() else {
+        bail!("compare takes two images, A.exr and REFERENCE.exr (voxgi help compare)");
     };
-    let (a, b) = (
-        output::load_exr(Path::new(pa))?,
-        output::load_exr(Path::new(pb))?,
-    );
-    let m = voxgi::metrics::try_compare(&a, &b, args.number("--exposure", 0.0)?)
-        .with_context(|| format!("{pa} against {pb}"))?;
+    let (a, b) = (output::load_exr(pa)?, output::load_exr(pb)?);
+    let m = voxgi::metrics::try_compare(&a, &b, c.exposure)
+        .with_context(|| format!("{} against {}", pa.display(), pb.display()))?;
     println!("{}", m.to_json());
     Ok(())
 }
 
 /// `voxgi bench`: the sweep, timing and error measurement live in voxgi::bench.
-fn bench(args: &Args) -> Result<()> {
-    let [scene] = args.positional.as_slice() else {
-        bail!("bench takes one scene\n\n{USAGE}");
+fn bench(c: BenchCmd) -> Result<()> {
+    let [scene] = c.scene.as_slice() else {
+        bail!("bench takes one scene (voxgi help bench)");
     };
-    let d = voxgi::bench::BenchOptions::default();
     let opts = voxgi::bench::BenchOptions {
-        scene: PathBuf::from(scene),
-        sweep: args.value("--sweep").unwrap_or(&d.sweep).to_string(),
-        out_dir: args.value("--out").map_or(d.out_dir.clone(), PathBuf::from),
-        width: args.number("--width", d.width)?,
-        height: args.number("--height", d.height)?,
-        frames: args.number("--frames", d.frames)?,
-        warmup: args.number("--warmup", d.warmup)?,
-        ref_spp: args.number("--ref-spp", d.ref_spp)?,
-        extra_lights: args
-            .value("--sun")
-            .map(parse_sun)
-            .transpose()?
-            .into_iter()
-            .collect(),
-        exposure: args.number("--exposure", d.exposure)?,
-        validate: args.flag("--validate"),
-        device: args.value("--device").map(String::from),
+        scene: scene.clone(),
+        sweep: c.sweep,
+        out_dir: c.out,
+        width: c.width,
+        height: c.height,
+        frames: c.frames,
+        warmup: c.warmup,
+        ref_spp: c.ref_spp,
+        extra_lights: c.sun.sun.into_iter().collect(),
+        exposure: c.exposure,
+        validate: c.device.validate,
+        device: c.device.device,
         command_line: voxgi::bench::shell_words(
             &std::iter::once("voxgi".to_string())
                 .chain(std::env::args().skip(1))
                 .collect::<Vec<_>>(),
         ),
-        ..d
+        ..Default::default()
     };
     voxgi::bench::run(&opts)?;
     Ok(())
 }
 
 /// `voxgi hard-cases`: every case (or those named) with --paper and with the defaults.
-fn hard_cases(args: &Args) -> Result<()> {
+fn hard_cases(c: HardCasesCmd) -> Result<()> {
     use voxgi::hard::{self, Env, Row, CASES};
-    for name in &args.positional {
-        if !CASES.iter().any(|c| c.name == name) {
-            let names: Vec<&str> = CASES.iter().map(|c| c.name).collect();
+    for name in &c.names {
+        if !CASES.iter().any(|k| k.name == name) {
+            let names: Vec<&str> = CASES.iter().map(|k| k.name).collect();
             bail!("no hard case {name:?} (the cases: {})", names.join(", "));
         }
     }
-    let default_bounces = voxgi::gi::GiSettings::default().bounces;
-    let bounces = args.bounces()?.unwrap_or(default_bounces);
-    let tail = !args.flag("--no-tail");
+    let default_bounces = GiSettings::default().bounces;
+    let bounces = c.bounces.unwrap_or(default_bounces);
+    let tail = !c.no_tail;
     let default_label = match (bounces == default_bounces, tail) {
         (true, true) => "default".to_string(),
         (false, true) => format!("default, {bounces} bounces"),
@@ -789,22 +844,17 @@ fn hard_cases(args: &Args) -> Result<()> {
     };
     let ctx = Context::new(&ContextDesc {
         validate: true,
-        device: args.value("--device").map(String::from),
+        device: c.device.clone(),
         ..Default::default()
     })?;
-    let mut env = Env::new(
-        ctx,
-        args.number("--size", 64)?,
-        args.number("--voxels", 64)?,
-        args.number("--ref-spp", 256)?,
-    )?;
+    let mut env = Env::new(ctx, c.size, c.voxels, c.ref_spp)?;
     env.bounces = bounces;
     env.tail = tail;
-    env.ideal = args.flag("--ideal");
+    env.ideal = c.ideal;
     let mut rows = Vec::new();
     for case in CASES
         .iter()
-        .filter(|c| args.positional.is_empty() || args.positional.iter().any(|n| n == c.name))
+        .filter(|k| c.names.is_empty() || c.names.iter().any(|n| n == k.name))
     {
         let paper = env.run(case, &env.settings(true));
         let default = env.run(case, &env.settings(false));
@@ -832,9 +882,9 @@ fn hard_cases(args: &Args) -> Result<()> {
     }
     let table = hard::table(&rows, &default_label, env.ideal);
     print!("{table}");
-    if let Some(out) = args.value("--out") {
-        output::write_bytes_atomic(Path::new(out), table.as_bytes())
-            .with_context(|| format!("writing {out}"))?;
+    if let Some(out) = &c.out {
+        output::write_bytes_atomic(out, table.as_bytes())
+            .with_context(|| format!("writing {}", out.display()))?;
     }
     let failed: Vec<&str> = rows
         .iter()
@@ -847,39 +897,57 @@ fn hard_cases(args: &Args) -> Result<()> {
     Ok(())
 }
 
-fn run() -> Result<()> {
-    let argv: Vec<String> = std::env::args().skip(1).collect();
-    let Some(cmd) = argv.first() else {
-        print!("{USAGE}");
-        return Ok(());
-    };
-    let args = Args::parse(&argv[1..])?;
-    if args.flag("--help") {
-        print!("{USAGE}");
-        return Ok(());
-    }
-    match cmd.as_str() {
-        "render" => render(&args),
-        "view" => view(&args),
-        "info" => info(&args),
-        "reference" => reference(&args),
-        "compare" => compare(&args),
-        "bench" => bench(&args),
-        "hard-cases" => hard_cases(&args),
-        "--help" | "-h" | "help" => {
-            print!("{USAGE}");
-            Ok(())
+/// A clap error as one line: its message and any suggestion ("a similar argument exists").
+fn one_line(e: &clap::Error) -> String {
+    let text = e.render().to_string();
+    let mut parts = Vec::new();
+    for line in text.lines().map(str::trim) {
+        if line.starts_with("Usage:") || line.starts_with("For more information") {
+            break;
         }
-        "--version" => {
-            println!("voxgi {}", env!("CARGO_PKG_VERSION"));
-            Ok(())
+        if !line.is_empty() {
+            parts.push(line.trim_start_matches("error: ").to_string());
         }
-        other => bail!("unknown command {other:?}\n\n{USAGE}"),
     }
+    // "not provided:" runs on into what was not provided.
+    parts.iter().fold(String::new(), |mut out, p| {
+        if !out.is_empty() {
+            out.push_str(if out.ends_with(':') { " " } else { "; " });
+        }
+        out.push_str(p);
+        out
+    })
 }
 
 fn main() -> ExitCode {
-    match run() {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            return match e.kind() {
+                ErrorKind::DisplayHelp
+                | ErrorKind::DisplayVersion
+                | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand => {
+                    print!("{}", e.render());
+                    ExitCode::SUCCESS
+                }
+                _ => {
+                    eprintln!("voxgi: error: {}", one_line(&e));
+                    ExitCode::FAILURE
+                }
+            };
+        }
+    };
+    let result = match cli.command {
+        Command::Render(c) => render(c),
+        Command::View(c) => view(c),
+        Command::Info(c) => info(c),
+        Command::Reference(c) => reference(c),
+        Command::Compare(c) => compare(c),
+        Command::Bench(c) => bench(c),
+        Command::HardCases(c) => hard_cases(c),
+    };
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("voxgi: error: {e:#}");

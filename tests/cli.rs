@@ -91,3 +91,33 @@ fn help_after_a_command_prints_usage_and_runs_nothing() {
     let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
     assert!(left.is_empty(), "render --help wrote {left:?}");
 }
+
+#[test]
+fn help_per_command_suggestions_and_one_error_line_with_status_1() {
+    let (ok, out, err) = voxgi(&["help", "render"]);
+    assert!(ok, "{err}");
+    assert!(
+        out.contains("voxgi render") && out.contains("--voxels") && out.contains("--no-tail"),
+        "{out}"
+    );
+    for (args, want) in [
+        (vec!["render", "--voxel", "32"], "--voxels"),
+        (vec!["rendr"], "'render'"),
+        (vec!["render", "--voxels", "2"], "4..=1024"),
+        (vec!["render", "--mode", "sideways"], "the modes are"),
+        (vec!["view", "--spin-speed", "10"], "--spin"),
+    ] {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_voxgi"))
+            .args(&args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {err}");
+        assert!(o.stdout.is_empty(), "{args:?} printed to stdout");
+        assert_eq!(err.lines().count(), 1, "{args:?}: not one line:\n{err}");
+        assert!(
+            err.starts_with("voxgi: error: ") && err.contains(want),
+            "{args:?}: {err}"
+        );
+    }
+}
