@@ -8,16 +8,7 @@ use gpu::context;
 use voxgi::gi::GiSettings;
 use voxgi::render::{Mode, RenderSettings, Renderer};
 
-const MODES: [Mode; 8] = [
-    Mode::Full,
-    Mode::Direct,
-    Mode::Indirect,
-    Mode::Ao,
-    Mode::VoxelsAlbedo,
-    Mode::VoxelsNormal,
-    Mode::VoxelsEmission,
-    Mode::VoxelsRadiance,
-];
+const MODES: [Mode; 8] = Mode::ALL;
 
 /// Consecutive passes of one name (a pass per mip level) read as one.
 fn merged(names: &[String]) -> Vec<String> {

@@ -2,8 +2,7 @@
 //! (glsl/gbuffer.vert, glsl/gbuffer.frag).
 
 use super::frame::{FrameTargets, DEPTH_FORMAT, GBUFFER_FORMATS};
-use super::gpu_scene::GpuScene;
-use super::instances::{self, Instances, DRAW_PUSH_SIZE, NORMAL, POSITION, TANGENT, UV};
+use super::instances::{self, SceneDraw, DRAW_PUSH_SIZE, NORMAL, POSITION, TANGENT, UV};
 use super::scene_set::SceneBindings;
 use crate::vk::pipeline::{area, cleared_depth, set_viewport};
 use crate::vk::{vk, Access, Bindings, Context, Graph, GraphicsDesc, Pass, Program, VkResult};
@@ -32,25 +31,19 @@ impl GBufferPass {
         Ok(GBufferPass { pass })
     }
 
-    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         ctx: &Context,
         g: &mut Graph,
         name: &str,
         targets: &FrameTargets,
-        instances: &Instances,
-        gpu: &GpuScene,
-        sets: &SceneBindings,
+        scene: &SceneDraw,
     ) {
         let d = &ctx.device;
         let (w, h) = (targets.width, targets.height);
-        let mut pass = self
-            .pass
-            .declare(g.pass(name), 0)
-            .image(&targets.depth, Access::DepthAttachmentWrite)
-            .buffer(&gpu.vertices, Access::VertexBuffer)
-            .buffer(&gpu.indices, Access::IndexBuffer);
+        let mut pass = scene
+            .declare(self.pass.declare(g.pass(name), 0))
+            .image(&targets.depth, Access::DepthAttachmentWrite);
         for img in &targets.gbuffer {
             pass = pass.image(img, Access::ColorAttachmentWrite);
         }
@@ -78,16 +71,8 @@ impl GBufferPass {
             unsafe {
                 d.cmd_begin_rendering(cmd, &info);
                 set_viewport(ctx, cmd, w, h);
-                instances.draw(
-                    d,
-                    cmd,
-                    &self.pass.pipeline,
-                    gpu,
-                    sets.scene_set(),
-                    &sets.materials,
-                    |i| instances.mirrored(i),
-                    |_| true,
-                );
+                let mirrored = |i| scene.instances.mirrored(i);
+                scene.draw(d, cmd, &self.pass.pipeline, mirrored, |_| true);
                 d.cmd_end_rendering(cmd);
             }
         });

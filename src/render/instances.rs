@@ -4,8 +4,10 @@
 
 use super::gpu::as_bytes;
 use super::gpu_scene::GpuScene;
+use super::scene_set::SceneBindings;
 use crate::scene::{Aabb, Scene};
-use crate::vk::{vk, Pipeline, SharedSet, VertexLayout};
+use crate::vk::graph::PassBuilder;
+use crate::vk::{vk, Access, Pipeline, VertexLayout};
 use glam::Mat4;
 
 /// Each draw's push constants (glsl: the Draw blocks of gbuffer, shadow and voxelize).
@@ -112,42 +114,55 @@ impl Instances {
         }
         moved
     }
+}
 
-    /// Draws the instances `include` accepts with `pipeline` (already bound), the scene set at
-    /// set 0 and each one's material set at set 1; `extra` is each draw's last push constant.
+/// What drawing the scene takes: the instances, the GPU scene's buffers and the shared sets.
+pub struct SceneDraw<'a> {
+    pub instances: &'a Instances,
+    pub gpu: &'a GpuScene,
+    pub sets: &'a SceneBindings,
+}
+
+impl SceneDraw<'_> {
+    /// Declares the draws' reads of the vertex and index buffers.
+    pub fn declare<'g, 'a, 'r>(&self, pass: PassBuilder<'g, 'a, 'r>) -> PassBuilder<'g, 'a, 'r> {
+        pass.buffer(&self.gpu.vertices, Access::VertexBuffer)
+            .buffer(&self.gpu.indices, Access::IndexBuffer)
+    }
+
+    /// Draws the instances `include` accepts with `pipeline`, the scene set at set 0 and each
+    /// one's material set at set 1; `extra` is each draw's last push constant.
     ///
     /// # Safety
     /// `cmd` is recording inside a rendering scope that `pipeline` fits.
-    #[allow(clippy::too_many_arguments)]
     pub unsafe fn draw(
         &self,
         d: &ash::Device,
         cmd: vk::CommandBuffer,
         pipeline: &Pipeline,
-        gpu: &GpuScene,
-        scene_set: vk::DescriptorSet,
-        materials: &SharedSet,
         extra: impl Fn(usize) -> u32,
         include: impl Fn(usize) -> bool,
     ) {
+        let (instances, gpu) = (self.instances, self.gpu);
         pipeline.bind(d, cmd);
-        pipeline.bind_sets(d, cmd, 0, &[scene_set]);
-        if self.draws.is_empty() {
+        pipeline.bind_sets(d, cmd, 0, &[self.sets.scene_set()]);
+        if instances.draws.is_empty() {
             return;
         }
         d.cmd_bind_vertex_buffers(cmd, 0, &[gpu.vertices.raw], &[0]);
         d.cmd_bind_index_buffer(cmd, gpu.indices.raw, 0, vk::IndexType::UINT32);
         let mut bound = u32::MAX;
-        for (i, &(first, count, material)) in self.draws.iter().enumerate() {
+        for (i, &(first, count, material)) in instances.draws.iter().enumerate() {
             if !include(i) {
                 continue;
             }
             if material != bound {
-                pipeline.bind_sets(d, cmd, 1, &[materials.sets[material as usize]]);
+                let set = self.sets.materials.sets[material as usize];
+                pipeline.bind_sets(d, cmd, 1, &[set]);
                 bound = material;
             }
             let push = DrawPush {
-                model: self.transforms[i],
+                model: instances.transforms[i],
                 material,
                 extra: extra(i),
             };

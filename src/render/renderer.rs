@@ -7,7 +7,7 @@ use super::frame::FrameTargets;
 use super::gbuffer::GBufferPass;
 use super::gpu::{as_bytes, FrameUniforms};
 use super::gpu_scene::{light_table, GpuScene};
-use super::instances::{self, Instances, DRAW_PUSH_SIZE, NORMAL, POSITION, UV};
+use super::instances::{self, Instances, SceneDraw, DRAW_PUSH_SIZE, NORMAL, POSITION, UV};
 use super::lighting::LightingPass;
 use super::scene_set::SceneBindings;
 use super::shadow_maps::ShadowMaps;
@@ -40,6 +40,18 @@ pub enum Mode {
 }
 
 impl Mode {
+    /// Every mode, in the order of [`Mode::NAMES`].
+    pub const ALL: [Mode; 8] = [
+        Mode::Full,
+        Mode::Direct,
+        Mode::Indirect,
+        Mode::Ao,
+        Mode::VoxelsAlbedo,
+        Mode::VoxelsNormal,
+        Mode::VoxelsEmission,
+        Mode::VoxelsRadiance,
+    ];
+
     pub const NAMES: &'static str =
         "full, direct, indirect, ao, voxels-albedo, voxels-normal, voxels-emission, voxels-radiance";
 
@@ -442,10 +454,19 @@ impl Renderer {
             .collect()
     }
 
+    /// What drawing the scene takes.
+    fn scene(&self) -> SceneDraw<'_> {
+        SceneDraw {
+            instances: &self.instances,
+            gpu: &self.gpu,
+            sets: &self.sets,
+        }
+    }
+
     fn record_step(&self, g: &mut Graph, step: Step) {
         let ctx = &self.ctx;
         let name = step.name();
-        let (targets, sets) = (&self.targets, &self.sets);
+        let targets = &self.targets;
         match step {
             Step::Shadows => {
                 // An emitter light's own faces would hide it (its centre may be inside).
@@ -455,19 +476,14 @@ impl Renderer {
                         (v.first..v.first + v.views.len() as u32).contains(&view)
                     })
                 };
-                let (gpu, instances) = (&self.gpu, &self.instances);
-                self.shadows
-                    .record(ctx, g, &name, instances, gpu, sets, hides)
+                self.shadows.record(ctx, g, &name, &self.scene(), hides)
             }
             Step::Voxels(s) => self.record_voxels(g, s),
-            Step::GBuffer => {
-                let (gpu, instances) = (&self.gpu, &self.instances);
-                self.gbuffer
-                    .record(ctx, g, &name, targets, instances, gpu, sets)
+            Step::GBuffer => self.gbuffer.record(ctx, g, &name, targets, &self.scene()),
+            Step::Lighting => {
+                let scene_set = self.sets.scene_set();
+                self.lighting.record(ctx, g, &name, targets, scene_set)
             }
-            Step::Lighting => self
-                .lighting
-                .record(ctx, g, &name, targets, sets.scene_set()),
             Step::Trace | Step::VoxelView => self.record_trace(g, &name),
             Step::Readback => targets.record_readback(ctx, g, &name),
         }
@@ -478,21 +494,16 @@ impl Renderer {
         let Some(gi) = &self.gi else {
             return;
         };
+        let scene = self.scene();
         let draw = |dynamic: bool| {
+            let scene = &scene;
             move |cmd: vk::CommandBuffer, p: &Pipeline, flags: u32| unsafe {
-                self.instances.draw(
-                    &self.ctx.device,
-                    cmd,
-                    p,
-                    &self.gpu,
-                    self.sets.scene_set(),
-                    &self.sets.materials,
-                    |i| {
-                        let light = self.emitter_of[i].map_or(0, |_| crate::gi::EMITTER_LIGHT);
-                        self.instances.mirrored(i) | flags | light
-                    },
-                    |i| self.instances.dynamic[i] == dynamic,
-                )
+                let extra = |i: usize| {
+                    let light = self.emitter_of[i].map_or(0, |_| crate::gi::EMITTER_LIGHT);
+                    self.instances.mirrored(i) | flags | light
+                };
+                let include = |i: usize| self.instances.dynamic[i] == dynamic;
+                scene.draw(&self.ctx.device, cmd, p, extra, include)
             }
         };
         let inputs = StepInputs {

@@ -2,8 +2,7 @@
 //! only where a light or a caster moved (glsl/shadow.vert, glsl/shadow.frag).
 
 use super::frame::DEPTH_FORMAT;
-use super::gpu_scene::GpuScene;
-use super::instances::{self, Instances, DRAW_PUSH_SIZE, POSITION, UV};
+use super::instances::{self, SceneDraw, DRAW_PUSH_SIZE, POSITION, UV};
 use super::scene_set::SceneBindings;
 use crate::vk::pipeline::{area, cleared_depth, set_viewport};
 use crate::vk::{
@@ -84,25 +83,19 @@ impl ShadowMaps {
 
     /// Draws the views that changed; `hides(instance, view)`: the instance casts no shadow in
     /// that view (an emitter light's own faces would hide it).
-    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         ctx: &Context,
         g: &mut Graph,
         name: &str,
-        instances: &Instances,
-        gpu: &GpuScene,
-        sets: &SceneBindings,
+        scene: &SceneDraw,
         hides: impl Fn(usize, u32) -> bool,
     ) {
         let d = &ctx.device;
         let res = self.resolution;
-        let pass = self
-            .pass
-            .declare(g.pass(name), 0)
-            .image(&self.map, Access::DepthAttachmentWrite)
-            .buffer(&gpu.vertices, Access::VertexBuffer)
-            .buffer(&gpu.indices, Access::IndexBuffer);
+        let pass = scene
+            .declare(self.pass.declare(g.pass(name), 0))
+            .image(&self.map, Access::DepthAttachmentWrite);
         pass.record(|cmd| {
             for (view, _) in self.dirty.iter().enumerate().filter(|(_, &d)| d) {
                 let view = view as u32;
@@ -114,16 +107,7 @@ impl ShadowMaps {
                 unsafe {
                     d.cmd_begin_rendering(cmd, &info);
                     set_viewport(ctx, cmd, res, res);
-                    instances.draw(
-                        d,
-                        cmd,
-                        &self.pass.pipeline,
-                        gpu,
-                        sets.scene_set(),
-                        &sets.materials,
-                        |_| view,
-                        |i| !hides(i, view),
-                    );
+                    scene.draw(d, cmd, &self.pass.pipeline, |_| view, |i| !hides(i, view));
                     d.cmd_end_rendering(cmd);
                 }
             }

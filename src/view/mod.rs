@@ -63,16 +63,7 @@ pub const CONTROLS: &[(&str, &str)] = &[
     ("Esc", "quit"),
 ];
 
-const MODES: [Mode; 8] = [
-    Mode::Full,
-    Mode::Direct,
-    Mode::Indirect,
-    Mode::Ao,
-    Mode::VoxelsAlbedo,
-    Mode::VoxelsNormal,
-    Mode::VoxelsEmission,
-    Mode::VoxelsRadiance,
-];
+const MODES: [Mode; 8] = Mode::ALL;
 const LETTERS: [KeyCode; 26] = [
     KeyCode::KeyA,
     KeyCode::KeyB,

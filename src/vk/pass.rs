@@ -375,7 +375,8 @@ pub struct Pass {
     /// Per instance: the accesses to declare (own tables, addresses reached, shared sets).
     accesses: Vec<Vec<(Tracked, Access)>>,
     _empty: Vec<SetLayout>,
-    _pool: DescriptorPool,
+    /// None when the pass has no sets of its own (it draws with shared ones only).
+    _pool: Option<DescriptorPool>,
 }
 
 impl Pass {
@@ -430,12 +431,18 @@ impl Pass {
             .iter()
             .flat_map(|_| own.iter().map(|(_, l)| l))
             .collect();
-        let pool = DescriptorPool::for_layouts(ctx, &layouts)?;
+        let pool = match layouts.is_empty() {
+            true => None,
+            false => Some(DescriptorPool::for_layouts(ctx, &layouts)?),
+        };
         let mut sets = Vec::new();
         for t in &tables {
             let mut instance = Vec::new();
             for (_, layout) in &own {
-                let set = pool.allocate(layout)?;
+                let set = pool
+                    .as_ref()
+                    .expect("a pool for own sets")
+                    .allocate(layout)?;
                 write(ctx, set, layout, t, &name)?;
                 instance.push(set);
             }
