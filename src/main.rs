@@ -184,25 +184,45 @@ struct SpinOpts {
     spin_speed: Option<f32>,
 }
 
+/// What `render` and `view` share: the scene, how it is rendered, lit, moved and shown.
 #[derive(Args)]
-struct RenderCmd {
+struct ShowOpts {
     /// A glTF 2.0 file (.gltf or .glb); default: the bundled Cornell box
     scene: Option<PathBuf>,
-    /// .exr: linear radiance (RGB float); .png: display image
-    #[arg(long, default_value = "voxgi.png")]
-    out: PathBuf,
     #[command(flatten)]
     render: RenderOpts,
-    /// Frames to render (timings are medians over them; default 1, 5 with --timings)
-    #[arg(long, value_name = "N")]
-    frames: Option<u32>,
-    /// Display exposure for .png, in stops
+    /// Display exposure (a .png's, the window's), in stops
     #[arg(long, value_name = "EV", default_value_t = 0.0)]
     exposure: f32,
     #[command(flatten)]
     sun: SunOpt,
     #[command(flatten)]
     spin: SpinOpts,
+}
+
+impl ShowOpts {
+    /// The render settings, then the scene (with `--sun`, warned about when nothing lights
+    /// it) and what moves in it.
+    fn load(&self) -> Result<(RenderSettings, Scene, scene::Motion)> {
+        let path = self.scene.clone().unwrap_or_else(default_scene);
+        let settings = self.render.settings()?;
+        let scene = scene_with_sun(&path, &self.sun)?;
+        warn_if_unlit(&scene, &path);
+        let motion = motion(&self.spin, &scene)?;
+        Ok((settings, scene, motion))
+    }
+}
+
+#[derive(Args)]
+struct RenderCmd {
+    #[command(flatten)]
+    show: ShowOpts,
+    /// .exr: linear radiance (RGB float); .png: display image
+    #[arg(long, default_value = "voxgi.png")]
+    out: PathBuf,
+    /// Frames to render (timings are medians over them; default 1, 5 with --timings)
+    #[arg(long, value_name = "N")]
+    frames: Option<u32>,
     /// The moving scene (animations, --spin) as it is T seconds in
     #[arg(long, value_name = "T")]
     time: Option<f32>,
@@ -212,17 +232,8 @@ struct RenderCmd {
 
 #[derive(Args)]
 struct ViewCmd {
-    /// A glTF 2.0 file (.gltf or .glb); default: the bundled Cornell box
-    scene: Option<PathBuf>,
     #[command(flatten)]
-    render: RenderOpts,
-    /// Display exposure in stops
-    #[arg(long, value_name = "EV", default_value_t = 0.0)]
-    exposure: f32,
-    #[command(flatten)]
-    sun: SunOpt,
-    #[command(flatten)]
-    spin: SpinOpts,
+    show: ShowOpts,
     /// Present without waiting for the display (mailbox or immediate)
     #[arg(long)]
     no_vsync: bool,
@@ -503,17 +514,13 @@ fn scene_with_sun(path: &Path, sun: &SunOpt) -> Result<Scene> {
 
 /// `voxgi view`: the renderer in a window.
 fn view(c: ViewCmd) -> Result<()> {
-    let scene_path = c.scene.unwrap_or_else(default_scene);
     if let Some(p) = &c.screenshot {
         let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("");
         if !ext.eq_ignore_ascii_case("png") {
             bail!("{}: screenshots are PNG files (.png)", p.display());
         }
     }
-    let settings = c.render.settings()?;
-    let scene = scene_with_sun(&scene_path, &c.sun)?;
-    warn_if_unlit(&scene, &scene_path);
-    let motion = motion(&c.spin, &scene)?;
+    let (settings, scene, motion) = c.show.load()?;
     let validating = c.device.validate;
     let report = voxgi::view::run(voxgi::view::ViewOptions {
         scene,
@@ -524,8 +531,8 @@ fn view(c: ViewCmd) -> Result<()> {
         resizes: c.resize,
         presses: c.press,
         spin: motion.spin,
-        exposure: c.exposure,
-        timings: c.render.timings,
+        exposure: c.show.exposure,
+        timings: c.show.render.timings,
         validate: validating,
         device: c.device.device,
     })?;
@@ -551,7 +558,6 @@ fn view(c: ViewCmd) -> Result<()> {
 }
 
 fn render(c: RenderCmd) -> Result<()> {
-    let scene_path = c.scene.unwrap_or_else(default_scene);
     let out = c.out;
     let ext = out.extension().and_then(|e| e.to_str()).unwrap_or("");
     if !ext.eq_ignore_ascii_case("exr") && !ext.eq_ignore_ascii_case("png") {
@@ -560,7 +566,7 @@ fn render(c: RenderCmd) -> Result<()> {
             out.display()
         );
     }
-    let mut settings = c.render.settings()?;
+    let (mut settings, mut scene, motion) = c.show.load()?;
     let (width, height, timings) = (settings.width, settings.height, settings.timings);
     let frames = c.frames.unwrap_or(if timings { 5 } else { 1 }).max(1);
     let time = c.time.unwrap_or(0.0);
@@ -568,9 +574,6 @@ fn render(c: RenderCmd) -> Result<()> {
         bail!("--time {time} must be a finite number of seconds, 0 or more");
     }
 
-    let mut scene = scene_with_sun(&scene_path, &c.sun)?;
-    warn_if_unlit(&scene, &scene_path);
-    let motion = motion(&c.spin, &scene)?;
     settings.dynamic_nodes = motion.prepare(&mut scene);
     let ctx = context(&c.device)?;
     let stats = ctx.stats.clone();
@@ -609,7 +612,7 @@ fn render(c: RenderCmd) -> Result<()> {
     if image.has_non_finite() {
         bail!("the rendered image has NaN or Inf pixels; nothing written");
     }
-    output::save(&image, &out, c.exposure)?;
+    output::save(&image, &out, c.show.exposure)?;
     eprintln!("wrote {}", out.display());
     Ok(())
 }
