@@ -8,8 +8,8 @@ const float PI = 3.14159265358979;
 const uint LIGHT_DIRECTIONAL = 0u;
 const uint LIGHT_POINT = 1u;
 const uint LIGHT_SPOT = 2u;
-// An emitter smaller than a voxel, injected as a light (src/render/emitter_lights.rs).
-const uint LIGHT_EMITTER = 3u;
+// An emissive surface lit as an area light (src/render/area_lights.rs, area_lights.glsl).
+const uint LIGHT_AREA = 3u;
 
 layout(set = 0, binding = 0, std140) uniform Frame {
     mat4 view_proj;
@@ -17,7 +17,8 @@ layout(set = 0, binding = 0, std140) uniform Frame {
     mat4 proj;
     vec4 eye;         // xyz camera position
     uvec4 counts;     // x lights, y width, z height, w shadow views
-    vec4 shadow;      // x shadow-map resolution, y normal-offset in texels, z PCF radius in texels
+    vec4 shadow;      // x shadow-map resolution, y normal-offset in texels, z PCF radius in texels,
+                      // w the widest soft-shadow filter's half width in texels
     vec4 grid;        // voxel grid: xyz origin (min corner), w edge length (metres)
     uvec4 grid_info;  // x resolution N, y bounces, z diffuse cone count, w flags (FLAG_*)
     vec4 cone;        // x diffuse aperture (tan of half angle), y step factor, z max distance
@@ -47,10 +48,11 @@ layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materi
 struct Light {
     vec4 position_type;   // xyz position, w type
     vec4 direction_range; // xyz direction the light shines along, w range (0: none)
-    vec4 radiance;        // rgb: W/sr (point, spot), W/m^2 (directional), Le (emitter;
-                          // w 1 when two-sided)
+    vec4 radiance;        // rgb: W/sr (point, spot), W/m^2 (directional), Le (area; w 1 when
+                          // two-sided)
     vec4 cone;            // x angle scale, y angle offset (glTF), z first shadow view, w view count
-                          // (emitter: x lobe area, y uniform area)
+                          // (area: x first polygon, y polygon count; direction_range.w its
+                          // radius from its centre, position_type.xyz)
 };
 layout(set = 0, binding = 3, std430) readonly buffer Lights { Light lights[]; };
 

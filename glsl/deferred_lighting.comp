@@ -1,5 +1,6 @@
 #version 450
-// Deferred direct lighting: punctual lights with filtered shadow maps, plus emission, written as
+// Deferred direct lighting: punctual lights with filtered shadow maps, emissive surfaces as area
+// lights (area_lights.glsl) with shadows softened by their size, plus emission, written as
 // linear radiance (RGBA32F).
 #include "common.glsl"
 #include "brdf.glsl"
@@ -14,6 +15,8 @@ layout(set = 1, binding = 3) uniform sampler2D gb_emission;
 layout(set = 1, binding = 4) uniform sampler2D gb_specular;
 layout(set = 1, binding = 5) uniform sampler2DArrayShadow shadow_map;
 layout(set = 1, binding = 6, rgba32f) uniform writeonly image2D out_radiance;
+// The same shadow maps' depths, for the area lights' blocker search.
+layout(set = 1, binding = 7) uniform sampler2DArray shadow_depth;
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -39,6 +42,12 @@ void main() {
     vec3 radiance = emission.rgb;
     for (uint i = 0u; i < frame.counts.x; i++) {
         Light light = lights[i];
+        if (uint(light.position_type.w) == LIGHT_AREA) {
+            vec3 e = area_light_radiance(light, s, p, n, v);
+            if (all(equal(e, vec3(0.0)))) continue;
+            radiance += e * area_shadow(light, p, geo, shadow_map, shadow_depth);
+            continue;
+        }
         vec3 l;
         float dist;
         vec3 e = light_irradiance(light, p, l, dist);

@@ -1,6 +1,7 @@
 // Punctual lights (KHR_lights_punctual, radiometric per CONVENTIONS.md) and shadow-map lookups.
 #ifndef LIGHTS_GLSL
 #define LIGHTS_GLSL
+#include "area_lights.glsl"
 
 // Irradiance on a surface facing the light, and the unit direction towards the light.
 vec3 light_irradiance(Light light, vec3 p, out vec3 to_light, out float dist) {
@@ -14,13 +15,13 @@ vec3 light_irradiance(Light light, vec3 p, out vec3 to_light, out float dist) {
     float d2 = max(dot(d, d), 1e-12);
     dist = sqrt(d2);
     to_light = d / dist;
-    if (type == LIGHT_EMITTER) {
-        // Intensity Le (lobe cos + uniform), cone.x and cone.y in square metres; |cos| when
-        // two-sided. Never more than pi Le, the irradiance under an emitter that fills the
-        // sky, which a point closer than the emitter's size would exceed.
-        float c = dot(light.direction_range.xyz, -to_light);
-        float lobe = light.radiance.w > 0.5 ? abs(c) : max(c, 0.0);
-        return light.radiance.rgb * min((light.cone.x * lobe + light.cone.y) / d2, PI);
+    if (type == LIGHT_AREA) {
+        // Where the light comes from on average and the irradiance facing it (the pixels
+        // integrate it exactly instead: deferred_lighting.comp).
+        vec3 f = area_vector_form_factor(light, p);
+        float l = length(f);
+        if (l > 0.0) to_light = f / l;
+        return light.radiance.rgb * (PI * l);
     }
     float atten = 1.0 / d2;
     float range = light.direction_range.w;
@@ -84,6 +85,87 @@ float shadow_visibility(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow sh
         }
     }
     return sum / n;
+}
+
+// How the depth of the plane through q (normal n) changes with the view's uv: project two
+// points a texel away along the plane and solve for the gradient. Zero when the view sees the
+// plane edge-on.
+vec2 receiver_slope(mat4 view_proj, vec3 q, vec3 n, float texel, vec2 uv, float depth) {
+    vec3 t1 = normalize(cross(n, abs(n.y) < 0.9 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
+    vec3 t2 = cross(n, t1);
+    vec4 c1 = view_proj * vec4(q + t1 * texel, 1.0);
+    vec4 c2 = view_proj * vec4(q + t2 * texel, 1.0);
+    if (c1.w <= 0.0 || c2.w <= 0.0) return vec2(0.0);
+    vec3 a = c1.xyz / c1.w;
+    vec3 b = c2.xyz / c2.w;
+    vec2 du1 = vec2(0.5 * a.x, -0.5 * a.y) + 0.5 - uv;
+    vec2 du2 = vec2(0.5 * b.x, -0.5 * b.y) + 0.5 - uv;
+    float det = du1.x * du2.y - du1.y * du2.x;
+    if (abs(det) < 1e-14) return vec2(0.0);
+    vec2 dz = vec2(a.z - depth, b.z - depth);
+    // [du1; du2] g = dz.
+    return vec2(du2.y * dz.x - du1.y * dz.y, du1.x * dz.y - du2.x * dz.x) / det;
+}
+
+// Visibility of an area light from p (0 to 1), by percentage-closer soft shadows in the cube
+// of views at its centre: the blockers' mean depth over the part of the view the light's
+// size could be hidden by gives the penumbra's width at p by similar triangles, radius x
+// (receiver - blocker) / blocker, and the comparisons are filtered over that width. Contact
+// shadows stay sharp, far ones widen with the light.
+float area_shadow(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow shadow_map,
+                  sampler2DArray shadow_depth) {
+    uint count = uint(light.cone.w);
+    if (count == 0u) return 1.0;
+    vec3 rel = p - light.position_type.xyz;
+    uint view = uint(light.cone.z) + cube_face(rel);
+    ShadowView sv = shadow_views[view];
+    float receiver = max(max(abs(rel.x), abs(rel.y)), abs(rel.z));
+    float texel = sv.info.y * receiver;  // metres per texel at p's depth
+    vec3 q = p + geo_n * texel * frame.shadow.y;
+    vec4 c = sv.view_proj * vec4(q, 1.0);
+    if (c.w <= 0.0) return 1.0;
+    vec3 ndc = c.xyz / c.w;
+    if (ndc.z > 1.0) return 1.0;
+    vec2 uv = vec2(0.5 + 0.5 * ndc.x, 0.5 - 0.5 * ndc.y);
+    float res = frame.shadow.x;
+    // The widest filter the views are widened for (shadows.rs: SOFT_SHADOW_SHARE).
+    float widest = max(frame.shadow.w, 1.0);
+    float radius = light.direction_range.w;
+    float near = sv.info.z;
+    float far = sv.info.w;
+    // Wide filters reach across the receiver itself: each tap compares against the receiver's
+    // plane there (its depth is affine in the view's uv), not against p's depth.
+    vec2 slope = receiver_slope(sv.view_proj, q, geo_n, texel, uv, ndc.z);
+    float bias = 2.0 / res * (abs(slope.x) + abs(slope.y)) + 1e-6;
+
+    // Blockers: a 4 x 4 grid over the light's radius as seen at p's depth.
+    float search = clamp(radius / texel, 1.0, widest);
+    float blockers = 0.0;
+    float found = 0.0;
+    for (int y = 0; y < 4; y++) {
+        for (int x = 0; x < 4; x++) {
+            vec2 o = (vec2(x, y) - 1.5) / 1.5 * search / res;
+            float d = texture(shadow_depth, vec3(uv + o, float(view))).r;
+            if (d < ndc.z + dot(slope, o) - bias) {
+                blockers += near * far / (far - d * (far - near));
+                found += 1.0;
+            }
+        }
+    }
+    if (found == 0.0) return 1.0;
+    float blocker = blockers / found;
+    float penumbra = radius * max(receiver - blocker, 0.0) / max(blocker, near) / texel;
+    penumbra = clamp(penumbra, max(frame.shadow.z, 0.5), widest);
+
+    // Comparisons over the penumbra: a 6 x 6 grid of bilinear taps.
+    float sum = 0.0;
+    for (int y = 0; y < 6; y++) {
+        for (int x = 0; x < 6; x++) {
+            vec2 o = (vec2(x, y) - 2.5) / 2.5 * penumbra / res;
+            sum += texture(shadow_map, vec4(uv + o, float(view), ndc.z + dot(slope, o) - bias));
+        }
+    }
+    return sum / 36.0;
 }
 
 #endif

@@ -107,10 +107,10 @@ struct GiOpts {
     /// further bounce's share of the one before)
     #[arg(long)]
     no_tail: bool,
-    /// Emitters smaller than a voxel stay voxel emission (by default up to four, the most
-    /// powerful, light the scene as point lights with shadow maps)
-    #[arg(long)]
-    no_emitter_lights: bool,
+    /// Emissive surfaces stay voxel emission, lit by the cones (by default up to eight, the
+    /// most powerful, are area lights: exact per pixel, with soft shadows)
+    #[arg(long, alias = "no-emitter-lights")]
+    no_area_lights: bool,
 }
 
 fn aperture(s: &str) -> Result<f32, String> {
@@ -451,7 +451,7 @@ impl GiOpts {
         gi.voxel_shadows = self.voxel_shadows;
         gi.cone_shadows = self.cone_shadows;
         gi.tail &= !self.no_tail;
-        gi.emitter_lights &= !self.no_emitter_lights;
+        gi.area_lights &= !self.no_area_lights;
         gi
     }
 }
@@ -711,14 +711,19 @@ fn info(c: InfoCmd) -> Result<()> {
             }
         );
     }
-    for e in renderer.emitter_lights() {
+    for e in renderer.area_lights() {
         let inst = &scene.instances[e.instance];
         println!(
-            "emitter    instance {} ({}) as a light at {:?}: {:.4} W, smaller than a voxel",
+            "area light instance {} ({}) at {:?}: {} triangles as {}, {} edges per pixel, \
+             {:.4} W{}",
             e.instance,
             inst.node_name.as_deref().unwrap_or("unnamed node"),
             e.position.to_array(),
+            e.triangles,
+            e.describe(),
+            e.edges(),
             e.power().max_element(),
+            if e.two_sided { ", two-sided" } else { "" },
         );
     }
     let mut report = ctx.allocator().generate_report().allocations;

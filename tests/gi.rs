@@ -302,7 +302,7 @@ fn a_small_emitter_in_the_voxels_sends_the_floor_its_own_light() {
     set.gi.bounces = 1;
     // The voxels' path, which emitters that do not become lights take (past the fourth, or
     // textured).
-    set.gi.emitter_lights = false;
+    set.gi.area_lights = false;
     let img = render(&s, set);
     let area = (2.0 * half) * (2.0 * half);
     let (mut got, mut want) = (0.0f64, 0.0f64);
@@ -443,7 +443,7 @@ fn the_tail_adds_the_bounces_not_traced_as_a_geometric_series() {
 }
 
 #[test]
-fn a_double_sided_emitter_lights_both_of_its_sides() {
+fn a_double_sided_area_lights_both_of_its_sides() {
     // The emissive square of the test above, 1 m over the floor, three ways: facing the floor;
     // facing up but double-sided (CONVENTIONS.md: it emits from both faces, so the floor must
     // get the same light; it got the one-sided emitter's when the back face's emission shared

@@ -575,7 +575,7 @@ fn the_readback_holds_the_directional_volumes_and_small_emitters() {
     let s = lamp_over_floor(2.0, 0.01, 1.0, 1e4);
     let mut set = voxel_settings(n, false, Mode::Full);
     // The emitter stays in the voxels (as a light it would leave them).
-    set.gi.emitter_lights = false;
+    set.gi.area_lights = false;
     let d = render_voxels(&s, set);
     let grid = VoxelGrid::fit(&s.bounds, n);
     let m = grid.aniso_resolution();

@@ -249,10 +249,10 @@ mod tests {
         assert_eq!(s.len(), 1);
         assert_eq!(s[0].gi.voxels, GiSettings::default().voxels);
         assert_eq!(s[0].label, "64^3 step=0.25 voxel-shadows=1");
-        let s = parse("emitter-lights=0,1").unwrap();
+        let s = parse("area-lights=0,1").unwrap();
         let labels: Vec<&str> = s.iter().map(|s| s.label.as_str()).collect();
-        assert_eq!(labels, ["64^3 emitter-lights=0", "64^3"]);
-        assert!(!s[0].gi.emitter_lights && s[1].gi.emitter_lights);
+        assert_eq!(labels, ["64^3 area-lights=0", "64^3"]);
+        assert!(!s[0].gi.area_lights && s[1].gi.area_lights);
     }
 
     #[test]

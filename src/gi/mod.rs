@@ -61,9 +61,9 @@ pub struct GiSettings {
     /// the voxels' mean albedo times their closed share, at most 0.6 (glsl/bounce_tail.comp).
     /// Needs `bounces` >= 2; not for `paper`.
     pub tail: bool,
-    /// Emitters smaller than a voxel light the scene as point lights with shadow maps
-    /// (src/render/emitter_lights.rs) instead of as voxel emission. Not for `paper`.
-    pub emitter_lights: bool,
+    /// Emissive surfaces light the scene as area lights, integrated per pixel, with soft
+    /// shadows (src/render/area_lights.rs), instead of as voxel emission. Not for `paper`.
+    pub area_lights: bool,
 }
 
 impl Default for GiSettings {
@@ -95,10 +95,10 @@ impl Default for GiSettings {
             // The closed rooms of docs/hard-cases.md lose a tenth of their light and more
             // without the third and later bounces; tracing them costs a bounce pass each.
             tail: true,
-            // A voxel's one radiance spreads a small emitter's light over what its coarse
-            // texels reach; as a light it falls where the emitter faces
-            // (docs/hard-cases.md, emissive-1e4).
-            emitter_lights: true,
+            // Cones sample an emitter at a few directions and coarse levels (streaks and
+            // blotches); a voxel's one radiance spreads a small emitter's light over what its
+            // coarse texels reach (docs/hard-cases.md, emissive-1e4, emitters).
+            area_lights: true,
         }
     }
 }
@@ -117,7 +117,7 @@ impl GiSettings {
             max_distance: 0.95,
             start_offset: 2.0,
             tail: false,
-            emitter_lights: false,
+            area_lights: false,
             ..Default::default()
         }
     }
@@ -280,12 +280,12 @@ pub const FIELDS: &[Field] = &[
         set: |g, v| g.tail = v != 0.0,
     },
     Field {
-        axis: "emitter-lights",
-        column: "emitter_lights",
+        axis: "area-lights",
+        column: "area_lights",
         min: 0.0,
         max: 1.0,
-        get: |g| Value::Switch(g.emitter_lights),
-        set: |g, v| g.emitter_lights = v != 0.0,
+        get: |g| Value::Switch(g.area_lights),
+        set: |g, v| g.area_lights = v != 0.0,
     },
 ];
 
@@ -510,7 +510,7 @@ pub struct GiInputs<'a> {
     pub draw_push_size: u32,
     /// The emitters injected as lights: each one's instance (whose emission stays out of the
     /// voxels) and its emission's brightest channel.
-    pub emitter_lights: &'a [(usize, f32)],
+    pub area_lights: &'a [(usize, f32)],
 }
 
 impl Gi {
@@ -528,7 +528,7 @@ impl Gi {
             .instances
             .iter()
             .enumerate()
-            .filter(|(i, _)| !inputs.emitter_lights.iter().any(|e| e.0 == *i))
+            .filter(|(i, _)| !inputs.area_lights.iter().any(|e| e.0 == *i))
             .filter_map(|(_, inst)| scene.primitives.get(inst.primitive as usize))
             .filter_map(|p| scene.materials.get(p.material as usize))
             .map(|m| m.emissive.max_element())
@@ -576,7 +576,7 @@ impl Gi {
                 // The emitters' lights as bright as their emission at most: a face no larger
                 // than the voxel, one voxel away.
                 let lights = inputs
-                    .emitter_lights
+                    .area_lights
                     .iter()
                     .map(|e| e.1)
                     .fold(max_emission, f32::max);
@@ -863,7 +863,7 @@ mod tests {
             cone_shadows: _,
             lod_offset: _,
             tail: _,
-            emitter_lights: _,
+            area_lights: _,
         } = GiSettings::default();
         assert_eq!(FIELDS.len(), 14, "a setting without its line in FIELDS");
         for f in FIELDS {

@@ -1,7 +1,7 @@
 //! CPU mirrors of the GPU structs in glsl/common.glsl (std140 / std430 layouts).
 
 use crate::scene::{AlphaMode, Light, LightKind, Material, TexRef};
-use glam::{Mat4, Vec4};
+use glam::{Mat4, Vec3, Vec4};
 
 /// Reinterprets plain-old-data as bytes for upload.
 pub fn as_bytes<T: Copy>(data: &[T]) -> &[u8] {
@@ -81,8 +81,11 @@ impl GpuMaterial {
 pub const LIGHT_DIRECTIONAL: f32 = 0.0;
 pub const LIGHT_POINT: f32 = 1.0;
 pub const LIGHT_SPOT: f32 = 2.0;
-/// An emitter smaller than a voxel (render/emitter_lights.rs).
-pub const LIGHT_EMITTER: f32 = 3.0;
+/// An emissive surface as an area light (render/area_lights.rs).
+pub const LIGHT_AREA: f32 = 3.0;
+/// glsl/area_lights.glsl: AREA_POLYGON, AREA_SPHERE.
+pub const AREA_POLYGON: u32 = 0;
+pub const AREA_SPHERE: u32 = 1;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default)]
@@ -118,18 +121,73 @@ impl GpuLight {
         }
     }
 
-    pub fn from_emitter(
-        e: &super::emitter_lights::EmitterLight,
+    /// An area light whose polygons start at `first_polygon` of the area tables.
+    pub fn from_area(
+        l: &super::area_lights::AreaLight,
+        first_polygon: u32,
+        polygons: u32,
         first_view: u32,
         views: u32,
     ) -> Self {
         GpuLight {
-            position_type: e.position.extend(LIGHT_EMITTER),
-            direction_range: e.axis.extend(0.0),
-            radiance: e.emission.extend(if e.two_sided { 1.0 } else { 0.0 }),
-            cone: Vec4::new(e.lobe, e.uniform, first_view as f32, views as f32),
+            position_type: l.position.extend(LIGHT_AREA),
+            direction_range: Vec3::ZERO.extend(l.radius),
+            radiance: l.emission.extend(if l.two_sided { 1.0 } else { 0.0 }),
+            cone: Vec4::new(
+                first_polygon as f32,
+                polygons as f32,
+                first_view as f32,
+                views as f32,
+            ),
         }
     }
+}
+
+/// glsl/area_lights.glsl: AreaPolygon.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default)]
+pub struct GpuAreaPolygon {
+    /// Front normal, and its dot with the polygon's points.
+    pub plane: Vec4,
+    /// First vertex, vertex count, kind (AREA_POLYGON, AREA_SPHERE), unused.
+    pub range: [u32; 4],
+}
+
+/// The area lights' polygons and corners (a sphere: one corner, its centre and radius), in
+/// light order.
+pub fn area_tables(
+    lights: &[super::area_lights::AreaLight],
+) -> (Vec<(u32, u32)>, Vec<GpuAreaPolygon>, Vec<Vec4>) {
+    use super::area_lights::Shape;
+    let (mut ranges, mut polygons, mut vertices) = (Vec::new(), Vec::new(), Vec::new());
+    for l in lights {
+        let first = polygons.len() as u32;
+        match &l.shape {
+            Shape::Polygons(polys) => {
+                for p in polys {
+                    polygons.push(GpuAreaPolygon {
+                        plane: p.normal.extend(p.normal.dot(p.vertices[0])),
+                        range: [
+                            vertices.len() as u32,
+                            p.vertices.len() as u32,
+                            AREA_POLYGON,
+                            0,
+                        ],
+                    });
+                    vertices.extend(p.vertices.iter().map(|v| v.extend(1.0)));
+                }
+            }
+            Shape::Sphere { centre, radius } => {
+                polygons.push(GpuAreaPolygon {
+                    plane: Vec4::ZERO,
+                    range: [vertices.len() as u32, 1, AREA_SPHERE, 0],
+                });
+                vertices.push(centre.extend(*radius));
+            }
+        }
+        ranges.push((first, polygons.len() as u32 - first));
+    }
+    (ranges, polygons, vertices)
 }
 
 #[repr(C)]
@@ -230,6 +288,11 @@ mod tests {
             &glsl_struct("deferred_lighting.comp", "ShadowView"),
             &fields!(ShadowView { view_proj, info }),
             std::mem::size_of::<ShadowView>(),
+        );
+        same_layout(
+            &glsl_struct("deferred_lighting.comp", "AreaPolygon"),
+            &fields!(GpuAreaPolygon { plane, range }),
+            std::mem::size_of::<GpuAreaPolygon>(),
         );
     }
 

@@ -1,13 +1,14 @@
 //! The scene on the GPU: geometry, materials, textures with mip chains, lights and their
 //! shadow views. Uploaded once through a staging buffer.
 
-use super::emitter_lights::EmitterLight;
-use super::gpu::{as_bytes, GpuLight, GpuMaterial, ShadowView};
-use super::shadows::{light_views, LightViews};
+use super::area_lights::AreaLight;
+use super::gpu::{area_tables, as_bytes, GpuAreaPolygon, GpuLight, GpuMaterial, ShadowView};
+use super::shadows::{light_views, soft_shadow_texels, LightViews};
 use crate::scene::{Aabb, Light, Scene, Texture, Wrap};
 use crate::vk::{
     vk, Access, Buffer, Context, Graph, Image, ImageDesc, ResourceStates, Sampler, VkResult,
 };
+use glam::Vec4;
 use gpu_allocator::MemoryLocation;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -16,8 +17,7 @@ pub struct GpuScene {
     pub vertices: Buffer,
     pub indices: Buffer,
     pub materials: Buffer,
-    pub lights: Buffer,
-    pub shadow_views: Buffer,
+    pub lights: LightBuffers,
     pub textures: Vec<Image>,
     /// Which sampler each texture uses.
     pub texture_samplers: Vec<usize>,
@@ -26,31 +26,120 @@ pub struct GpuScene {
     pub shadow_view_count: u32,
 }
 
-/// The lights as the shaders read them, and their shadow views: the scene's lights in order,
-/// then the emitters injected as lights (each a point light's six views).
+/// The lights, their shadow views and the area lights' shapes (host-visible: rewritten when an
+/// area light moves), and the LTC table.
+pub struct LightBuffers {
+    pub lights: Buffer,
+    pub shadow_views: Buffer,
+    pub area_polygons: Buffer,
+    pub area_vertices: Buffer,
+    pub ltc: Buffer,
+}
+
+impl LightBuffers {
+    fn new(ctx: &Arc<Context>, table: &LightTable) -> VkResult<LightBuffers> {
+        let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
+        // Never empty: a buffer of no bytes cannot be bound.
+        fn or_one<T: Copy + Default>(v: &[T]) -> Vec<T> {
+            if v.is_empty() {
+                vec![T::default()]
+            } else {
+                v.to_vec()
+            }
+        }
+        let views: Vec<ShadowView> = table
+            .views
+            .iter()
+            .flat_map(|v| v.views.iter().copied())
+            .collect();
+        Ok(LightBuffers {
+            lights: Buffer::with_data(ctx, "lights", as_bytes(&or_one(&table.lights)), storage)?,
+            shadow_views: Buffer::with_data(
+                ctx,
+                "shadow views",
+                as_bytes(&or_one(&views)),
+                storage,
+            )?,
+            area_polygons: Buffer::with_data(
+                ctx,
+                "area polygons",
+                as_bytes(&or_one(&table.area_polygons)),
+                storage,
+            )?,
+            area_vertices: Buffer::with_data(
+                ctx,
+                "area vertices",
+                as_bytes(&or_one(&table.area_vertices)),
+                storage,
+            )?,
+            ltc: Buffer::with_data(ctx, "LTC table", as_bytes(super::ltc::gpu_table()), storage)?,
+        })
+    }
+
+    /// Writes a table of the same lights and shapes (moved); the frame before was waited for.
+    pub fn write(&mut self, table: &LightTable) {
+        let views: Vec<ShadowView> = table
+            .views
+            .iter()
+            .flat_map(|v| v.views.iter().copied())
+            .collect();
+        if !table.lights.is_empty() {
+            self.lights.write(0, as_bytes(&table.lights));
+        }
+        if !views.is_empty() {
+            self.shadow_views.write(0, as_bytes(&views));
+        }
+        if !table.area_polygons.is_empty() {
+            self.area_polygons.write(0, as_bytes(&table.area_polygons));
+            self.area_vertices.write(0, as_bytes(&table.area_vertices));
+        }
+    }
+}
+
+/// The lights as the shaders read them, their shadow views and the area lights' shapes.
+pub struct LightTable {
+    pub views: Vec<LightViews>,
+    pub lights: Vec<GpuLight>,
+    pub area_polygons: Vec<GpuAreaPolygon>,
+    pub area_vertices: Vec<Vec4>,
+}
+
+/// The scene's lights in order, then the area lights (each seen from its centre through six
+/// views, widened for the softest shadow's filter: shadows::SOFT_SHADOW_SHARE).
 pub fn light_table(
     lights: &[Light],
-    emitters: &[EmitterLight],
+    area: &[AreaLight],
     bounds: &Aabb,
     shadow_resolution: u32,
     pcf_radius: u32,
-) -> (Vec<LightViews>, Vec<GpuLight>) {
-    let points: Vec<Light> = emitters.iter().map(EmitterLight::as_point_light).collect();
-    let all: Vec<Light> = lights.iter().chain(&points).cloned().collect();
-    let views = light_views(&all, bounds, shadow_resolution, pcf_radius);
-    let (user_views, emitter_views) = views.split_at(lights.len());
+) -> LightTable {
+    let mut views = light_views(lights, bounds, shadow_resolution, pcf_radius);
+    let points: Vec<Light> = area.iter().map(AreaLight::as_point_light).collect();
+    let first = views.iter().map(|v| v.views.len() as u32).sum::<u32>();
+    let soft = soft_shadow_texels(shadow_resolution).max(pcf_radius);
+    let mut area_views = light_views(&points, bounds, shadow_resolution, soft);
+    for v in &mut area_views {
+        v.first += first;
+    }
+    let (ranges, area_polygons, area_vertices) = area_tables(area);
     let gpu = lights
         .iter()
-        .zip(user_views)
+        .zip(&views)
         .map(|(l, v)| GpuLight::from_light(l, v.first, v.views.len() as u32))
         .chain(
-            emitters
-                .iter()
-                .zip(emitter_views)
-                .map(|(e, v)| GpuLight::from_emitter(e, v.first, v.views.len() as u32)),
+            area.iter()
+                .zip(&area_views)
+                .zip(ranges)
+                .map(|((l, v), r)| GpuLight::from_area(l, r.0, r.1, v.first, v.views.len() as u32)),
         )
         .collect();
-    (views, gpu)
+    views.extend(area_views);
+    LightTable {
+        views,
+        lights: gpu,
+        area_polygons,
+        area_vertices,
+    }
 }
 
 impl GpuScene {
@@ -138,7 +227,7 @@ impl GpuScene {
         ctx: &Arc<Context>,
         scene: &Scene,
         states: &mut ResourceStates,
-        emitters: &[EmitterLight],
+        area_lights: &[AreaLight],
         shadow_resolution: u32,
         pcf_radius: u32,
     ) -> VkResult<GpuScene> {
@@ -189,34 +278,14 @@ impl GpuScene {
             vk::BufferUsageFlags::STORAGE_BUFFER,
         )?;
 
-        let (views, mut gpu_lights) = light_table(
+        let table = light_table(
             &scene.lights,
-            emitters,
+            area_lights,
             &scene.bounds,
             shadow_resolution,
             pcf_radius,
         );
-        if gpu_lights.is_empty() {
-            gpu_lights.push(GpuLight::default());
-        }
-        let lights = Buffer::with_data(
-            ctx,
-            "lights",
-            as_bytes(&gpu_lights),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
-        let mut all_views: Vec<ShadowView> =
-            views.iter().flat_map(|v| v.views.iter().copied()).collect();
-        let shadow_view_count = all_views.len() as u32;
-        if all_views.is_empty() {
-            all_views.push(ShadowView::default());
-        }
-        let shadow_views = Buffer::with_data(
-            ctx,
-            "shadow views",
-            as_bytes(&all_views),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
+        let light_buffers = LightBuffers::new(ctx, &table)?;
 
         // Textures, then a 1x1 white one bound wherever a material has no texture.
         let white = Texture {
@@ -375,13 +444,12 @@ impl GpuScene {
             vertices,
             indices,
             materials,
-            lights,
-            shadow_views,
+            lights: light_buffers,
             textures,
             texture_samplers,
             samplers,
-            light_views: views,
-            shadow_view_count,
+            shadow_view_count: table.views.iter().map(|v| v.views.len() as u32).sum(),
+            light_views: table.views,
         })
     }
 }

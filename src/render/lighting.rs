@@ -22,6 +22,7 @@ fn table(targets: &FrameTargets, nearest: &Sampler, shadow: (&Image, &Sampler)) 
             t.sampled(name, img, nearest)
         })
         .sampled("shadow_map", shadow.0, shadow.1)
+        .sampled("shadow_depth", shadow.0, nearest)
         .image("out_radiance", &targets.hdr, Usage::Write)
 }
 

@@ -1,13 +1,14 @@
 //! The renderer: shadow maps, G-buffer and deferred lighting, recorded as declared passes, and
 //! the voxel passes of crate::gi, composed by `Renderer`.
 
-pub mod emitter_lights;
+pub mod area_lights;
 mod frame;
 mod gbuffer;
 pub mod gpu;
 mod gpu_scene;
 mod instances;
 mod lighting;
+pub mod ltc;
 mod renderer;
 mod scene_set;
 mod shadow_maps;

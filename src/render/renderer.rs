@@ -2,10 +2,10 @@
 //! targets, the shadow maps, the G-buffer and lighting passes, the instances and their motion,
 //! and the voxel passes (crate::gi); each frame records the steps its state calls for.
 
-use super::emitter_lights::{self, EmitterLight};
+use super::area_lights::{self, AreaLight};
 use super::frame::FrameTargets;
 use super::gbuffer::GBufferPass;
-use super::gpu::{as_bytes, FrameUniforms};
+use super::gpu::FrameUniforms;
 use super::gpu_scene::{light_table, GpuScene};
 use super::instances::{self, Instances, SceneDraw, DRAW_PUSH_SIZE, NORMAL, POSITION, UV};
 use super::lighting::LightingPass;
@@ -191,10 +191,10 @@ pub struct Renderer {
     instances: Instances,
     /// The scene's lights (set_lights replaces them).
     lights: Vec<Light>,
-    /// Emitters smaller than a voxel, lit as lights after the scene's (emitter_lights.rs).
-    emitters: Vec<EmitterLight>,
-    /// Per instance: the emitter light it is, if any.
-    emitter_of: Vec<Option<usize>>,
+    /// Emissive surfaces lit as area lights, after the scene's lights (area_lights.rs).
+    area_lights: Vec<AreaLight>,
+    /// Per instance: the area light it is, if any.
+    area_light_of: Vec<Option<usize>>,
     /// The scene's bounds (light views are fitted to them).
     bounds: Aabb,
     specular_needed: bool,
@@ -204,16 +204,16 @@ pub struct Renderer {
 impl Renderer {
     pub fn new(ctx: &Arc<Context>, scene: &Scene, settings: RenderSettings) -> VkResult<Renderer> {
         let mut states = ResourceStates::default();
-        let emitters = emitters_as_lights(scene, &settings);
-        let mut emitter_of = vec![None; scene.instances.len()];
-        for (k, e) in emitters.iter().enumerate() {
-            emitter_of[e.instance] = Some(k);
+        let area_lights = area_lights_of(scene, &settings);
+        let mut area_light_of = vec![None; scene.instances.len()];
+        for (k, e) in area_lights.iter().enumerate() {
+            area_light_of[e.instance] = Some(k);
         }
         let gpu = GpuScene::upload(
             ctx,
             scene,
             &mut states,
-            &emitters,
+            &area_lights,
             settings.shadow_resolution,
             settings.pcf_radius,
         )?;
@@ -230,7 +230,7 @@ impl Renderer {
         let gbuffer = GBufferPass::new(ctx, &sets)?;
         let shadow = (&shadows.map, &shadows.sampler);
         let lighting = LightingPass::new(ctx, &sets, &targets, &nearest, shadow)?;
-        let lit: Vec<(usize, f32)> = emitters
+        let lit: Vec<(usize, f32)> = area_lights
             .iter()
             .map(|e| (e.instance, e.emission.max_element()))
             .collect();
@@ -246,7 +246,7 @@ impl Renderer {
                 },
                 vertices: instances::vertices(&[POSITION, NORMAL, UV]),
                 draw_push_size: DRAW_PUSH_SIZE,
-                emitter_lights: &lit,
+                area_lights: &lit,
             };
             let light_voxels = settings.mode.lights_voxels();
             let dynamic = instances.any_dynamic();
@@ -285,8 +285,8 @@ impl Renderer {
             states,
             instances,
             lights: scene.lights.clone(),
-            emitters,
-            emitter_of,
+            area_lights,
+            area_light_of,
             bounds: scene.bounds,
             specular_needed: scene
                 .materials
@@ -313,7 +313,7 @@ impl Renderer {
             proj,
             eye: self.camera.eye().extend(1.0),
             counts: [
-                (self.lights.len() + self.emitters.len()) as u32,
+                (self.lights.len() + self.area_lights.len()) as u32,
                 w,
                 h,
                 self.gpu.shadow_view_count,
@@ -322,7 +322,7 @@ impl Renderer {
                 self.settings.shadow_resolution as f32,
                 self.settings.normal_offset,
                 self.settings.pcf_radius as f32,
-                0.0,
+                super::shadows::soft_shadow_texels(self.settings.shadow_resolution) as f32,
             ),
             ..Default::default()
         };
@@ -469,9 +469,9 @@ impl Renderer {
         let targets = &self.targets;
         match step {
             Step::Shadows => {
-                // An emitter light's own faces would hide it (its centre may be inside).
+                // An area light's own faces would hide it (its centre may be inside).
                 let hides = |i: usize, view: u32| {
-                    self.emitter_of[i].is_some_and(|k| {
+                    self.area_light_of[i].is_some_and(|k| {
                         let v = &self.gpu.light_views[self.lights.len() + k];
                         (v.first..v.first + v.views.len() as u32).contains(&view)
                     })
@@ -499,7 +499,7 @@ impl Renderer {
             let scene = &scene;
             move |cmd: vk::CommandBuffer, p: &Pipeline, flags: u32| unsafe {
                 let extra = |i: usize| {
-                    let light = self.emitter_of[i].map_or(0, |_| crate::gi::EMITTER_LIGHT);
+                    let light = self.area_light_of[i].map_or(0, |_| crate::gi::EMITTER_LIGHT);
                     self.instances.mirrored(i) | flags | light
                 };
                 let include = |i: usize| self.instances.dynamic[i] == dynamic;
@@ -552,15 +552,15 @@ impl Renderer {
             gi.dirty.static_voxels |= moved.iter().any(|m| !m.dynamic);
             gi.dirty.dynamic_voxels |= moved.iter().any(|m| m.dynamic);
         }
-        // An emitter light goes with its faces: its views draw again and the voxels are lit
+        // An area light goes with its faces: its views draw again and the voxels are lit
         // again.
         let mut moved_light = false;
-        for k in 0..self.emitters.len() {
+        for k in 0..self.area_lights.len() {
             if moved
                 .iter()
-                .any(|m| m.instance == self.emitters[k].instance)
+                .any(|m| m.instance == self.area_lights[k].instance)
             {
-                self.emitters[k].place(&world);
+                self.area_lights[k].place(&world);
                 let v = &self.gpu.light_views[self.lights.len() + k];
                 let views = v.first as usize..v.first as usize + v.views.len();
                 self.shadows.dirty[views].fill(true);
@@ -575,29 +575,23 @@ impl Renderer {
         }
     }
 
-    /// The emitters smaller than a voxel that light the scene as lights.
-    pub fn emitter_lights(&self) -> &[EmitterLight] {
-        &self.emitters
+    /// The emissive surfaces lit as area lights.
+    pub fn area_lights(&self) -> &[AreaLight] {
+        &self.area_lights
     }
 
-    /// Writes the lights and their shadow views (the scene's and the emitters') for the next
+    /// Writes the lights and their shadow views (the scene's and the area lights') for the next
     /// frame; the previous frame was waited for, so nothing on the GPU reads them now.
     fn write_lights(&mut self) {
-        let (views, gpu_lights) = light_table(
+        let table = light_table(
             &self.lights,
-            &self.emitters,
+            &self.area_lights,
             &self.bounds,
             self.settings.shadow_resolution,
             self.settings.pcf_radius,
         );
-        let all_views: Vec<_> = views.iter().flat_map(|v| v.views.iter().copied()).collect();
-        if !gpu_lights.is_empty() {
-            self.gpu.lights.write(0, as_bytes(&gpu_lights));
-        }
-        if !all_views.is_empty() {
-            self.gpu.shadow_views.write(0, as_bytes(&all_views));
-        }
-        self.gpu.light_views = views;
+        self.gpu.lights.write(&table);
+        self.gpu.light_views = table.views;
     }
 
     /// A new frame size: the frame's targets are made again at the new size; the scene, the
@@ -695,13 +689,14 @@ impl Renderer {
     }
 }
 
-/// The emitters smaller than a voxel lit as lights: only where the voxels are lit (the views
-/// of the voxels' materials show every emitter's emission), never for --paper.
-fn emitters_as_lights(scene: &Scene, settings: &RenderSettings) -> Vec<EmitterLight> {
+/// The emissive surfaces lit as area lights: where the pixels are shaded and the voxels lit
+/// (the views of the voxels' materials show every emitter's emission) or in direct mode, never
+/// for --paper.
+fn area_lights_of(scene: &Scene, settings: &RenderSettings) -> Vec<AreaLight> {
     let gi = &settings.gi;
-    if settings.mode.lights_voxels() && gi.emitter_lights && !gi.paper {
-        let grid = crate::gi::VoxelGrid::fit(&scene.bounds, gi.voxels);
-        emitter_lights::find(scene, grid.voxel_size())
+    let mode = settings.mode;
+    if (mode.lights_voxels() || mode == Mode::Direct) && gi.area_lights && !gi.paper {
+        area_lights::find(scene)
     } else {
         Vec::new()
     }

@@ -29,8 +29,11 @@ impl SceneBindings {
         let table = Bindings::new()
             .uniform("frame", &frame_ubo)
             .buffer("Materials", &gpu.materials, Usage::Read)
-            .buffer("Lights", &gpu.lights, Usage::Read)
-            .buffer("ShadowViews", &gpu.shadow_views, Usage::Read);
+            .buffer("Lights", &gpu.lights.lights, Usage::Read)
+            .buffer("ShadowViews", &gpu.lights.shadow_views, Usage::Read)
+            .buffer("AreaPolygons", &gpu.lights.area_polygons, Usage::Read)
+            .buffer("AreaVertices", &gpu.lights.area_vertices, Usage::Read)
+            .buffer("LtcTable", &gpu.lights.ltc, Usage::Read);
         let scene_set = SharedSet::new(ctx, "scene set", 0, vec![table])?;
         let default_material = [Material::default()];
         let materials = if scene.materials.is_empty() {

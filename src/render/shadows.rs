@@ -6,6 +6,16 @@ use super::gpu::ShadowView;
 use crate::scene::{Aabb, Light, LightKind};
 use glam::{Mat4, Vec3, Vec4};
 
+/// The widest filter an area light's soft shadows take, as a fraction of the shadow map's
+/// side (half width); their views are widened by it so that filtering near a face's edge
+/// stays inside the face.
+pub const SOFT_SHADOW_SHARE: f32 = 1.0 / 16.0;
+
+/// [`SOFT_SHADOW_SHARE`] in texels.
+pub fn soft_shadow_texels(resolution: u32) -> u32 {
+    (resolution as f32 * SOFT_SHADOW_SHARE).ceil() as u32
+}
+
 /// Views of one light and where they start in the shadow array.
 pub struct LightViews {
     pub first: u32,

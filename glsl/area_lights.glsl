@@ -1,0 +1,216 @@
+// Emissive surfaces as area lights (src/render/area_lights.rs): the light a polygon of uniform
+// radiance Le sends a point, integrated exactly. Lambert's formula gives the irradiance as a
+// sum over the polygon's edges (seen from the point, each edge's arc angle times its great
+// circle's normal); clipped to the surface's horizon it is exact for the diffuse lobe.
+// Linearly transformed cosines (Heitz et al. 2016) turn the specular lobe into a clamped cosine
+// by a 3x3 matrix fitted per roughness and view angle (src/render/ltc.rs): the same formula on
+// the polygon's transformed corners integrates the lobe.
+#ifndef AREA_LIGHTS_GLSL
+#define AREA_LIGHTS_GLSL
+
+const uint AREA_POLYGON = 0u;
+const uint AREA_SPHERE = 1u;
+// The sides of the polygon a sphere's disc is drawn as (area_lights.rs: SPHERE_SIDES).
+const uint SPHERE_SIDES = 8u;
+
+struct AreaPolygon {
+    vec4 plane;    // xyz the front normal (unit), w its dot with the polygon's points
+    uvec4 range;   // x first vertex, y vertex count, z kind (AREA_POLYGON, AREA_SPHERE)
+};
+layout(set = 0, binding = 5, std430) readonly buffer AreaPolygons { AreaPolygon area_polygons[]; };
+// Polygon corners counter-clockwise seen from the front (xyz); a sphere's centre and radius.
+layout(set = 0, binding = 6, std430) readonly buffer AreaVertices { vec4 area_vertices[]; };
+
+// The LTC table (src/render/ltc.rs): per roughness (rows) and sqrt(1 - n.v) (within a row), on a
+// square grid whose first and last cells sit at 0 and 1, two vec4s: the inverse matrix's
+// entries a, b, c, d (M^-1 = [[a 0 b] [0 1 0] [c 0 d]]), then the lobe's directional albedo
+// with Fresnel 1 and its Schlick part.
+layout(set = 0, binding = 7, std430) readonly buffer LtcTable { vec4 ltc_table[]; };
+
+struct Ltc {
+    mat3 inverse;   // from the shading frame (area_frame) to the clamped cosine's
+    float albedo;   // integral of D V cos over the sphere
+    float schlick;  // integral of D V cos (1 - v.h)^5
+};
+
+Ltc ltc_lookup(float roughness, float n_dot_v) {
+    int size = int(sqrt(float(ltc_table.length() / 2)) + 0.5);
+    // x: the view angle (the table's fastest index), y: roughness.
+    vec2 uv = vec2(sqrt(1.0 - clamp(n_dot_v, 0.0, 1.0)), clamp(roughness, 0.0, 1.0));
+    uv *= float(size - 1);
+    ivec2 i = min(ivec2(uv), ivec2(size - 2));
+    vec2 f = uv - vec2(i);
+    vec4 m = vec4(0.0);
+    vec4 e = vec4(0.0);
+    for (int k = 0; k < 4; k++) {
+        ivec2 c = i + ivec2(k & 1, k >> 1);
+        float w = ((k & 1) == 1 ? f.x : 1.0 - f.x) * ((k >> 1) == 1 ? f.y : 1.0 - f.y);
+        int cell = c.x + size * c.y;
+        m += w * ltc_table[2 * cell];
+        e += w * ltc_table[2 * cell + 1];
+    }
+    // Columns of [[a 0 b] [0 1 0] [c 0 d]].
+    mat3 inverse = mat3(vec3(m.x, 0.0, m.z), vec3(0.0, 1.0, 0.0), vec3(m.y, 0.0, m.w));
+    return Ltc(inverse, e.x, e.y);
+}
+
+// Corner k of a polygon, seen from p (world). A sphere shows p the disc across it of the same
+// solid angle: a regular polygon of SPHERE_SIDES sides with the disc's area, facing p.
+vec3 area_corner(AreaPolygon poly, uint k, vec3 p) {
+    vec4 v = area_vertices[poly.range.x + (poly.range.z == AREA_SPHERE ? 0u : k)];
+    if (poly.range.z != AREA_SPHERE) return v.xyz;
+    vec3 d = v.xyz - p;
+    float dist = max(length(d), v.w * 1.0001);
+    vec3 w = d / max(length(d), 1e-30);
+    // The cone's half angle asin(r / dist); the disc through the centre that fills it.
+    float r = v.w * dist / sqrt(dist * dist - v.w * v.w);
+    // A regular polygon has sides/(2 pi) sin(2 pi/sides) of its circle's area.
+    const float ANGLE = 2.0 * PI / float(SPHERE_SIDES);
+    r *= sqrt(ANGLE / sin(ANGLE));
+    vec3 u = normalize(cross(w, abs(w.y) < 0.99 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
+    vec3 t = cross(w, u);
+    // Counter-clockwise seen from p (its front faces p).
+    float a = ANGLE * float(k);
+    return v.xyz + r * (cos(a) * u - sin(a) * t);
+}
+
+uint area_corner_count(AreaPolygon poly) {
+    return poly.range.z == AREA_SPHERE ? SPHERE_SIDES : poly.range.y;
+}
+
+// Which side of the polygon p is on: +1 in front, -1 behind, 0 in its plane. A sphere's disc
+// always faces p.
+float area_side(AreaPolygon poly, vec3 p) {
+    if (poly.range.z == AREA_SPHERE) return 1.0;
+    float s = dot(poly.plane.xyz, p) - poly.plane.w;
+    return s > 0.0 ? 1.0 : (s < 0.0 ? -1.0 : 0.0);
+}
+
+// One edge's term of Lambert's formula: the arc angle between a and b (any length) times the
+// unit normal of their great circle, as a vector (atan2 keeps it accurate for short edges).
+vec3 edge_term(vec3 a, vec3 b) {
+    vec3 c = cross(a, b);
+    float s = length(c);
+    return s > 0.0 ? c * (atan(s, dot(a, b)) / s) : vec3(0.0);
+}
+
+// The sum of edge terms' z of the polygon's corners taken to `local` (relative to p), clipped
+// to z >= 0: minus 2 pi times the clamped-cosine form factor of a polygon whose front faces p.
+// The clip walks the outline once: an edge leaving the upper side ends at the horizon, and the
+// horizon's arc to where the outline comes back closes it (in any order: arcs along the
+// horizon add up).
+float clipped_edge_sum(AreaPolygon poly, vec3 p, mat3 local) {
+    uint n = area_corner_count(poly);
+    vec3 first = local * (area_corner(poly, 0u, p) - p);
+    vec3 a = first;
+    float sum = 0.0;
+    vec3 exit_point = vec3(0.0);
+    vec3 first_entry = vec3(0.0);
+    bool exited = false;
+    bool entered_first = false;
+    for (uint k = 0u; k < n; k++) {
+        vec3 b = k + 1u == n ? first : local * (area_corner(poly, k + 1u, p) - p);
+        bool a_up = a.z >= 0.0;
+        bool b_up = b.z >= 0.0;
+        if (a_up && b_up) {
+            sum += edge_term(a, b).z;
+        } else if (a_up != b_up) {
+            vec3 x = mix(a, b, a.z / (a.z - b.z));
+            x.z = 0.0;
+            if (a_up) {
+                sum += edge_term(a, x).z;
+                exit_point = x;
+                exited = true;
+            } else {
+                if (exited) {
+                    sum += edge_term(exit_point, x).z;
+                    exited = false;
+                } else {
+                    first_entry = x;
+                    entered_first = true;
+                }
+                sum += edge_term(x, b).z;
+            }
+        }
+        a = b;
+    }
+    if (exited && entered_first) sum += edge_term(exit_point, first_entry).z;
+    return sum;
+}
+
+// The shading frame's rows: x the tangent towards v, y the bitangent, z the normal.
+mat3 area_frame(vec3 n, vec3 v) {
+    vec3 t = v - n * dot(n, v);
+    float l = length(t);
+    t = l > 1e-6 ? t / l : normalize(cross(n, abs(n.y) < 0.99 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
+    vec3 b = cross(n, t);
+    return transpose(mat3(t, b, n));
+}
+
+// The form factor of one area light's polygons from p for a surface of normal n (0 to 1; pi
+// Le times it is the irradiance), with `local` the map from world offsets to the frame whose
+// z is the lobe's axis (area_frame, or the LTC's inverse matrix times it).
+float area_form_factor(Light light, vec3 p, mat3 local) {
+    uint first = uint(light.cone.x);
+    uint count = uint(light.cone.y);
+    bool two_sided = light.radiance.w > 0.5;
+    float f = 0.0;
+    for (uint i = 0u; i < count; i++) {
+        AreaPolygon poly = area_polygons[first + i];
+        float side = area_side(poly, p);
+        if (side == 0.0 || (side < 0.0 && !two_sided)) continue;
+        // A front face turns clockwise around the lobe's axis seen from p: negative sums.
+        f += -side * clipped_edge_sum(poly, p, local);
+    }
+    return max(f, 0.0) / (2.0 * PI);
+}
+
+// The vector form factor of the light's polygons (unclipped): for any normal above all of
+// them, dot(normal, it) is the form factor; its direction is where the light comes from on
+// average. For the voxels' normal-weighted lighting.
+vec3 area_vector_form_factor(Light light, vec3 p) {
+    uint first = uint(light.cone.x);
+    uint count = uint(light.cone.y);
+    bool two_sided = light.radiance.w > 0.5;
+    vec3 f = vec3(0.0);
+    for (uint i = 0u; i < count; i++) {
+        AreaPolygon poly = area_polygons[first + i];
+        float side = area_side(poly, p);
+        if (side == 0.0 || (side < 0.0 && !two_sided)) continue;
+        uint n = area_corner_count(poly);
+        vec3 first_corner = area_corner(poly, 0u, p) - p;
+        vec3 a = first_corner;
+        vec3 sum = vec3(0.0);
+        for (uint k = 0u; k < n; k++) {
+            vec3 b = k + 1u == n ? first_corner : area_corner(poly, k + 1u, p) - p;
+            sum += edge_term(a, b);
+            a = b;
+        }
+        f -= side * sum;
+    }
+    return f / (2.0 * PI);
+}
+
+#ifdef BRDF_GLSL
+// The light an area light sends towards v from p (normal n), unshadowed: the diffuse lobe by
+// the exact form factor (its Fresnel as the specular lobe's mean), the specular lobe by LTC.
+vec3 area_light_radiance(Light light, Surface s, vec3 p, vec3 n, vec3 v) {
+    mat3 local = area_frame(n, v);
+    float n_dot_v = clamp(dot(n, v), 1e-4, 1.0);
+    vec3 f0 = mix(min(vec3(0.04) * s.specular_color, vec3(1.0)) * s.specular, s.base_color, s.metallic);
+    vec3 f90 = vec3(mix(s.specular, 1.0, s.metallic));
+    Ltc ltc = ltc_lookup(s.roughness, n_dot_v);
+    vec3 reflectance = f0 * (ltc.albedo - ltc.schlick) + f90 * ltc.schlick;
+    vec3 result = vec3(0.0);
+    if (s.metallic < 1.0) {
+        float diffuse = area_form_factor(light, p, local);
+        result += (1.0 - s.metallic) * (1.0 - reflectance) * s.base_color * diffuse;
+    }
+    if (max(reflectance.r, max(reflectance.g, reflectance.b)) > 0.0) {
+        result += reflectance * area_form_factor(light, p, ltc.inverse * local);
+    }
+    return light.radiance.rgb * result;
+}
+#endif
+
+#endif
