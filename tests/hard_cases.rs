@@ -175,6 +175,8 @@ cases! {
     sun_along_axis => "sun-along-axis",
     sun_grazing => "sun-grazing",
     emissive_1e4 => "emissive-1e4",
+    area_cornell => "area-cornell",
+    area_room => "area-room",
     emissive_dynamic => "emissive-dynamic",
     grazing_surfaces => "grazing-surfaces",
     cones_leave_grid => "cones-leave-grid",

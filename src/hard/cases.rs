@@ -215,6 +215,32 @@ pub static CASES: &[Case] = &[
         },
     },
     Case {
+        name: "area-cornell",
+        group: "emission",
+        what: "the classic Cornell box lit only by its 13 x 10.5 cm two-sided ceiling quad; \
+               relMSE against the reference",
+        metric: "relMSE",
+        goal: Goal::AtMost(0.01),
+        run: |env, gi| {
+            let (b, cam) = cornell_quad_light();
+            let s = env.load("area-cornell", &b)?;
+            env.error_vs_reference(&s, &cam, gi)
+        },
+    },
+    Case {
+        name: "area-room",
+        group: "emission",
+        what: "a 4 x 2.5 x 4 m room lit only by two emissive spheres and two cubes 15 to 25 \
+               cm across; relMSE against the reference",
+        metric: "relMSE",
+        goal: Goal::AtMost(0.03),
+        run: |env, gi| {
+            let (b, cam) = emitter_room();
+            let s = env.load("area-room", &b)?;
+            env.error_vs_reference(&s, &cam, gi)
+        },
+    },
+    Case {
         name: "emissive-dynamic",
         group: "emission",
         what: "an emissive box that moves (dynamic voxels); relMSE against a static render \

@@ -357,3 +357,194 @@ pub fn transform_camera(c: &Camera, scale: f32, offset: Vec3, origin: glam::DVec
         ..c.clone()
     }
 }
+
+/// The classic Cornell box (0.555 m, its measured albedos) lit only by its 13 x 10.5 cm
+/// ceiling quad, two-sided, emissive strength 17, 1 mm below the ceiling; the camera at the
+/// open front.
+pub fn cornell_quad_light() -> (SceneBuilder, Camera) {
+    let mut b = SceneBuilder::new();
+    let white = b.add_material(MaterialDesc::lambertian("white", [0.73, 0.73, 0.73]));
+    let red = b.add_material(MaterialDesc::lambertian("red", [0.63, 0.065, 0.05]));
+    let green = b.add_material(MaterialDesc::lambertian("green", [0.14, 0.45, 0.091]));
+    let (lo, hi) = ([0.0, 0.0, 0.0], [0.555, 0.549, 0.559]);
+    let white_walls = merge(&[
+        slab_face(lo, hi, 1, lo[1], 1.0, white),
+        slab_face(lo, hi, 1, hi[1], -1.0, white),
+        slab_face(lo, hi, 2, hi[2], -1.0, white),
+    ]);
+    let room = b.add_mesh(
+        "box",
+        vec![
+            white_walls,
+            slab_face(lo, hi, 0, hi[0], -1.0, red),
+            slab_face(lo, hi, 0, lo[0], 1.0, green),
+        ],
+    );
+    b.add_node(NodeDesc::new("box").mesh(room));
+    let cube = b.add_mesh("block", vec![unit_cube(Some(white))]);
+    let turn = |deg: f32| {
+        let h = (0.5 * deg).to_radians();
+        [0.0, h.sin(), 0.0, h.cos()]
+    };
+    b.add_node(
+        NodeDesc::new("short block")
+            .mesh(cube)
+            .translation([0.186, 0.0825, 0.169])
+            .rotation(turn(-17.0))
+            .scale([0.165, 0.165, 0.165]),
+    );
+    b.add_node(
+        NodeDesc::new("tall block")
+            .mesh(cube)
+            .translation([0.368, 0.165, 0.351])
+            .rotation(turn(17.0))
+            .scale([0.165, 0.33, 0.165]),
+    );
+    let mut light = MaterialDesc::lambertian("light", [0.78, 0.78, 0.78]).emissive([1.0; 3], 17.0);
+    light.double_sided = true;
+    let light = b.add_material(light);
+    let (cx, cz, y) = (0.2775, 0.2795, hi[1] - 0.001);
+    let (hx, hz) = (0.065, 0.0525);
+    let quad_light = quad(
+        [
+            [cx - hx, y, cz - hz],
+            [cx + hx, y, cz - hz],
+            [cx + hx, y, cz + hz],
+            [cx - hx, y, cz + hz],
+        ],
+        [0.0, -1.0, 0.0],
+        Some(light),
+    );
+    let mesh = b.add_mesh("light", vec![quad_light]);
+    b.add_node(NodeDesc::new("light").mesh(mesh));
+    let camera = look_at(
+        Vec3::new(0.2775, 0.2745, -0.8),
+        Vec3::new(0.2775, 0.2745, 0.0),
+        39.3,
+        0.01,
+    );
+    add_camera_node(&mut b, &camera);
+    (b, camera)
+}
+
+/// Adds `camera` as the file's camera node, so that a user (or the bench) sees what the case
+/// sees.
+pub fn add_camera_node(b: &mut SceneBuilder, camera: &Camera) {
+    let c = b.add_camera(CameraDesc {
+        name: Some("camera".into()),
+        yfov: camera.yfov,
+        znear: camera.znear,
+        zfar: Some(camera.zfar),
+        aspect_ratio: None,
+    });
+    let m = camera.world.to_cols_array();
+    let mut node = NodeDesc::new("camera").camera(c);
+    node.matrix = Some(m);
+    b.add_node(node);
+}
+
+/// A UV sphere of `rings` x `segments` facets, outward normals.
+pub fn uv_sphere(radius: f32, rings: u32, segments: u32, material: usize) -> PrimitiveDesc {
+    let mut positions = Vec::new();
+    let mut normals = Vec::new();
+    for i in 0..=rings {
+        for j in 0..=segments {
+            let th = std::f32::consts::PI * i as f32 / rings as f32;
+            let ph = std::f32::consts::TAU * j as f32 / segments as f32;
+            let n = [th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin()];
+            normals.push(n);
+            positions.push(n.map(|c| c * radius));
+        }
+    }
+    let at = |i: u32, j: u32| i * (segments + 1) + j;
+    let mut indices = Vec::new();
+    for i in 0..rings {
+        for j in 0..segments {
+            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+            // Counter-clockwise seen from outside.
+            if i > 0 {
+                indices.extend([a, d, b]);
+            }
+            if i + 1 < rings {
+                indices.extend([d, c, b]);
+            }
+        }
+    }
+    PrimitiveDesc {
+        positions,
+        normals: Some(normals),
+        uvs: None,
+        indices: Some(indices),
+        material: Some(material),
+    }
+}
+
+/// A 4 x 2.5 x 4 m closed room with a box and a block, lit only by four small coloured
+/// emitters, 15 to 25 cm across (2 to 4 voxels at 64^3): two spheres and two cubes. The
+/// camera stands inside by the front wall.
+pub fn emitter_room() -> (SceneBuilder, Camera) {
+    let mut b = SceneBuilder::new();
+    let white = b.add_material(MaterialDesc::lambertian("white", WHITE));
+    let blue = b.add_material(MaterialDesc::lambertian("blue", [0.2, 0.3, 0.7]));
+    let (lo, hi) = ([-2.0, 0.0, -2.0], [2.0, 2.5, 2.0]);
+    let walls = b.add_mesh("room", vec![inward_box(lo, hi, white)]);
+    b.add_node(NodeDesc::new("room").mesh(walls));
+    let cube = b.add_mesh("block", vec![unit_cube(Some(white))]);
+    b.add_node(
+        NodeDesc::new("table")
+            .mesh(cube)
+            .translation([-0.5, 0.4, -0.6])
+            .scale([1.2, 0.8, 0.7]),
+    );
+    let tall = b.add_mesh("pillar", vec![unit_cube(Some(blue))]);
+    b.add_node(
+        NodeDesc::new("pillar")
+            .mesh(tall)
+            .translation([1.0, 0.9, -0.9])
+            .scale([0.4, 1.8, 0.4]),
+    );
+    let emitters: [(&str, [f32; 3], f32, bool, [f32; 3]); 4] = [
+        (
+            "warm sphere",
+            [1.0, 0.75, 0.45],
+            0.2,
+            true,
+            [-0.5, 1.3, -0.6],
+        ),
+        (
+            "blue sphere",
+            [0.35, 0.55, 1.0],
+            0.15,
+            true,
+            [1.3, 0.3, 0.6],
+        ),
+        (
+            "green cube",
+            [0.4, 1.0, 0.45],
+            0.25,
+            false,
+            [-1.5, 2.2, 1.0],
+        ),
+        ("red cube", [1.0, 0.3, 0.25], 0.18, false, [0.6, 0.09, -1.6]),
+    ];
+    for (name, colour, size, sphere, at) in emitters {
+        let m = b.add_material(MaterialDesc::lambertian(name, [0.8; 3]).emissive(colour, 40.0));
+        let prim = if sphere {
+            uv_sphere(0.5 * size, 12, 24, m)
+        } else {
+            unit_cube(Some(m))
+        };
+        let mesh = b.add_mesh(name, vec![prim]);
+        let node = NodeDesc::new(name).mesh(mesh).translation(at);
+        let node = if sphere { node } else { node.scale([size; 3]) };
+        b.add_node(node);
+    }
+    let camera = look_at(
+        Vec3::new(0.2, 1.5, 1.9),
+        Vec3::new(-0.2, 0.8, -1.0),
+        60.0,
+        0.01,
+    );
+    add_camera_node(&mut b, &camera);
+    (b, camera)
+}

@@ -213,6 +213,29 @@ pub fn v4(v: Vec3) -> Vec4 {
     v.extend(1.0)
 }
 
+/// Adds triangles (counter-clockwise seen from their fronts) as one primitive placed once;
+/// returns the instance index.
+pub fn mesh(scene: &mut Scene, triangles: &[[Vec3; 3]], material: u32) -> usize {
+    let first = scene.indices.len() as u32;
+    let mut bounds = Aabb::EMPTY;
+    for p in triangles {
+        let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
+        let base = scene.vertices.len() as u32;
+        for c in p {
+            scene.vertices.push(Vertex {
+                position: c.to_array(),
+                normal: n.to_array(),
+                uv: [0.0, 0.0],
+                tangent: [1.0, 0.0, 0.0, 1.0],
+            });
+            bounds.extend(*c);
+        }
+        scene.indices.extend([base, base + 1, base + 2]);
+    }
+    let count = scene.indices.len() as u32 - first;
+    add_instance(scene, first, count, material, bounds)
+}
+
 /// Adds one triangle (with its own primitive and instance) and returns the instance index.
 pub fn triangle(scene: &mut Scene, p: [Vec3; 3], uv: [[f32; 2]; 3], material: u32) -> usize {
     let n = (p[1] - p[0]).cross(p[2] - p[0]).normalize();
