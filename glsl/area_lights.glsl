@@ -165,6 +165,36 @@ float area_form_factor(Light light, vec3 p, mat3 local) {
     return max(f, 0.0) / (2.0 * PI);
 }
 
+// Whether p lies within `reach` of the light's surface (inside a sphere's). A voxel the light
+// passes through is the light itself or what it hides: a ceiling 1 mm above a two-sided panel
+// is lit by its back, but only the gap sees that, while the voxel would send it everywhere.
+bool area_light_near(Light light, vec3 p, float reach) {
+    if (length(p - light.position_type.xyz) > light.direction_range.w + reach) return false;
+    uint first = uint(light.cone.x);
+    uint count = uint(light.cone.y);
+    for (uint i = 0u; i < count; i++) {
+        AreaPolygon poly = area_polygons[first + i];
+        if (poly.range.z == AREA_SPHERE) {
+            vec4 s = area_vertices[poly.range.x];
+            if (length(p - s.xyz) < s.w + reach) return true;
+            continue;
+        }
+        vec3 n = poly.plane.xyz;
+        if (abs(dot(n, p) - poly.plane.w) >= reach) continue;
+        // Within reach of the outline on its inner side (convex outlines).
+        bool inside = true;
+        uint m = poly.range.y;
+        for (uint k = 0u; k < m && inside; k++) {
+            vec3 a = area_vertices[poly.range.x + k].xyz;
+            vec3 b = area_vertices[poly.range.x + (k + 1u) % m].xyz;
+            vec3 inward = cross(n, b - a);
+            inside = dot(inward, p - a) >= -reach * length(inward);
+        }
+        if (inside) return true;
+    }
+    return false;
+}
+
 // The vector form factor of the light's polygons (unclipped): for any normal above all of
 // them, dot(normal, it) is the form factor; its direction is where the light comes from on
 // average. For the voxels' normal-weighted lighting.

@@ -78,6 +78,9 @@ void main() {
     vec3 lit_side = vec3(0.0);
     for (uint i = 0u; i < frame.counts.x; i++) {
         Light light = lights[i];
+#ifndef PAPER
+        if (uint(light.position_type.w) == LIGHT_AREA && area_light_near(light, p, vs)) continue;
+#endif
         vec3 l;
         float dist;
         vec3 e = light_irradiance(light, p, l, dist);
