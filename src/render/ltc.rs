@@ -25,8 +25,9 @@
 //!             [0, 1, 0],
 //!             [c, 0, d]],
 //! mapping shading-frame directions to the clamped cosine's frame. The normalisation is free (the
-//! LTC is invariant to scaling Minv) and this one keeps the entries bounded (|a|, |c| <= ~1,
-//! d ~ alpha at normal incidence) so that they interpolate well. err is the fit's L1 error
+//! LTC is invariant to scaling Minv) and this one keeps the entries bounded (all four in
+//! [-0.14, 1.6]; at normal incidence a = 1, b = c = 0 and d ~ 2 alpha for sharp lobes), so that
+//! they interpolate well. err is the fit's L1 error
 //! integral |rho / n - LTC| (in [0, 2]), a diagnostic.
 //!
 //! # On the GPU
@@ -355,10 +356,20 @@ mod tests {
                 }
             }
         }
-        println!("worst: {worst:.4}, with Fresnel {worst_f:.4}");
+        let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+        println!("D V cos: worst {worst:.4}, mean {mean:.4}; with Fresnel: worst {worst_f:.4}");
+        // Measured with this table: worst 0.103 (roughness 0.5, 60 degrees, the overhead
+        // square), mean 0.013. The scalar Fresnel split is worse at grazing view (the lobe's mean
+        // Schlick weight, which the reflection direction dominates, given to light from
+        // overhead): measured worst 0.85, checked loosely so that n and s stay consistent.
         assert!(
-            worst < 1.0,
+            worst < 0.12,
             "the worst error of the D V cos integral, {worst}"
         );
+        assert!(
+            mean < 0.015,
+            "the mean error of the D V cos integral, {mean}"
+        );
+        assert!(worst_f < 0.9, "the worst error with Fresnel, {worst_f}");
     }
 }
