@@ -479,15 +479,29 @@ pub fn uv_sphere(radius: f32, rings: u32, segments: u32, material: usize) -> Pri
     }
 }
 
-/// A 4 x 2.5 x 4 m closed room with a box and a block, lit only by four small coloured
+/// A 4 x 2.5 x 4 m closed room (pale walls and ceiling, a wooden floor) with a table and a
+/// pillar, lit only by four small coloured
 /// emitters, 15 to 25 cm across (2 to 4 voxels at 64^3): two spheres and two cubes. The
 /// camera stands inside by the front wall.
 pub fn emitter_room() -> (SceneBuilder, Camera) {
     let mut b = SceneBuilder::new();
     let white = b.add_material(MaterialDesc::lambertian("white", WHITE));
+    let wall = b.add_material(MaterialDesc::lambertian("wall", [0.7, 0.68, 0.62]));
+    let wood = b.add_material(MaterialDesc::lambertian("floor", [0.4, 0.28, 0.18]));
     let blue = b.add_material(MaterialDesc::lambertian("blue", [0.2, 0.3, 0.7]));
     let (lo, hi) = ([-2.0, 0.0, -2.0], [2.0, 2.5, 2.0]);
-    let walls = b.add_mesh("room", vec![inward_box(lo, hi, white)]);
+    let mut faces = Vec::new();
+    for axis in 0..3 {
+        for (side, at) in [(1.0, lo[axis]), (-1.0, hi[axis])] {
+            if axis != 1 || side < 0.0 {
+                faces.push(slab_face(lo, hi, axis, at, side, wall));
+            }
+        }
+    }
+    let walls = b.add_mesh(
+        "room",
+        vec![merge(&faces), slab_face(lo, hi, 1, lo[1], 1.0, wood)],
+    );
     b.add_node(NodeDesc::new("room").mesh(walls));
     let cube = b.add_mesh("block", vec![unit_cube(Some(white))]);
     b.add_node(
