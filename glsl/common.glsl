@@ -51,8 +51,9 @@ struct Light {
     vec4 radiance;        // rgb: W/sr (point, spot), W/m^2 (directional), Le (area; w 1 when
                           // two-sided)
     vec4 cone;            // x angle scale, y angle offset (glTF), z first shadow view, w view count
-                          // (area: x first polygon, y polygon count; direction_range.w its
-                          // radius from its centre, position_type.xyz)
+                          // (area: x first polygon, y polygon count; direction_range.x the
+                          // radius of its apparent disc, w its reach from its centre,
+                          // position_type.xyz)
 };
 layout(set = 0, binding = 3, std430) readonly buffer Lights { Light lights[]; };
 

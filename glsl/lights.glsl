@@ -87,6 +87,14 @@ float shadow_visibility(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow sh
     return sum / n;
 }
 
+// Tap i of n spread evenly over the unit disc (Vogel's spiral: golden-angle turns, radii by
+// area), the same for every pixel: no straight edge lines up with a row of taps.
+vec2 vogel_disc(int i, int n) {
+    float r = sqrt((float(i) + 0.5) / float(n));
+    float a = float(i) * 2.39996323;
+    return r * vec2(cos(a), sin(a));
+}
+
 // How the depth of the plane through q (normal n) changes with the view's uv: project two
 // points a texel away along the plane and solve for the gradient. Zero when the view sees the
 // plane edge-on.
@@ -130,7 +138,7 @@ float area_shadow(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow shadow_m
     float res = frame.shadow.x;
     // The widest filter the views are widened for (shadows.rs: SOFT_SHADOW_SHARE).
     float widest = max(frame.shadow.w, 1.0);
-    float radius = light.direction_range.w;
+    float radius = light.direction_range.x;
     float near = sv.info.z;
     float far = sv.info.w;
     // Wide filters reach across the receiver itself: each tap compares against the receiver's
@@ -138,18 +146,16 @@ float area_shadow(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow shadow_m
     vec2 slope = receiver_slope(sv.view_proj, q, geo_n, texel, uv, ndc.z);
     float bias = 2.0 / res * (abs(slope.x) + abs(slope.y)) + 1e-6;
 
-    // Blockers: a 4 x 4 grid over the light's radius as seen at p's depth.
+    // Blockers: 16 taps over the light's radius as seen at p's depth.
     float search = clamp(radius / texel, 1.0, widest);
     float blockers = 0.0;
     float found = 0.0;
-    for (int y = 0; y < 4; y++) {
-        for (int x = 0; x < 4; x++) {
-            vec2 o = (vec2(x, y) - 1.5) / 1.5 * search / res;
-            float d = texture(shadow_depth, vec3(uv + o, float(view))).r;
-            if (d < ndc.z + dot(slope, o) - bias) {
-                blockers += near * far / (far - d * (far - near));
-                found += 1.0;
-            }
+    for (int i = 0; i < 16; i++) {
+        vec2 o = vogel_disc(i, 16) * search / res;
+        float d = texture(shadow_depth, vec3(uv + o, float(view))).r;
+        if (d < ndc.z + dot(slope, o) - bias) {
+            blockers += near * far / (far - d * (far - near));
+            found += 1.0;
         }
     }
     if (found == 0.0) return 1.0;
@@ -157,15 +163,13 @@ float area_shadow(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow shadow_m
     float penumbra = radius * max(receiver - blocker, 0.0) / max(blocker, near) / texel;
     penumbra = clamp(penumbra, max(frame.shadow.z, 0.5), widest);
 
-    // Comparisons over the penumbra: a 6 x 6 grid of bilinear taps.
+    // Comparisons over the penumbra, a disc like the light's: 32 bilinear taps.
     float sum = 0.0;
-    for (int y = 0; y < 6; y++) {
-        for (int x = 0; x < 6; x++) {
-            vec2 o = (vec2(x, y) - 2.5) / 2.5 * penumbra / res;
-            sum += texture(shadow_map, vec4(uv + o, float(view), ndc.z + dot(slope, o) - bias));
-        }
+    for (int i = 0; i < 32; i++) {
+        vec2 o = vogel_disc(i, 32) * penumbra / res;
+        sum += texture(shadow_map, vec4(uv + o, float(view), ndc.z + dot(slope, o) - bias));
     }
-    return sum / 36.0;
+    return sum / 32.0;
 }
 
 #endif

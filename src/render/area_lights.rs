@@ -79,6 +79,19 @@ pub struct AreaLight {
 }
 
 impl AreaLight {
+    /// The radius of the disc as large as the light looks on average, for the soft shadows'
+    /// penumbra: a flat light's area, a closed one's mean silhouette (a quarter of its area,
+    /// Cauchy's formula for convex bodies; a sphere's disc).
+    pub fn apparent_radius(&self) -> f32 {
+        let seen = match &self.shape {
+            Shape::Polygons(p) if p.iter().all(|q| q.normal.dot(p[0].normal) > 0.999) => self.area,
+            _ => 0.25 * self.area,
+        };
+        (seen / std::f32::consts::PI).sqrt()
+    }
+}
+
+impl AreaLight {
     /// Places the light for the instance's world transform.
     pub fn place(&mut self, world: &Mat4) {
         let flip = world.determinant() < 0.0;

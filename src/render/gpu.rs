@@ -1,7 +1,7 @@
 //! CPU mirrors of the GPU structs in glsl/common.glsl (std140 / std430 layouts).
 
 use crate::scene::{AlphaMode, Light, LightKind, Material, TexRef};
-use glam::{Mat4, Vec3, Vec4};
+use glam::{Mat4, Vec4};
 
 /// Reinterprets plain-old-data as bytes for upload.
 pub fn as_bytes<T: Copy>(data: &[T]) -> &[u8] {
@@ -131,7 +131,7 @@ impl GpuLight {
     ) -> Self {
         GpuLight {
             position_type: l.position.extend(LIGHT_AREA),
-            direction_range: Vec3::ZERO.extend(l.radius),
+            direction_range: Vec4::new(l.apparent_radius(), 0.0, 0.0, l.radius),
             radiance: l.emission.extend(if l.two_sided { 1.0 } else { 0.0 }),
             cone: Vec4::new(
                 first_polygon as f32,
