@@ -10,7 +10,8 @@
 
 const uint AREA_POLYGON = 0u;
 const uint AREA_SPHERE = 1u;
-// The sides of the polygon a sphere's disc is drawn as (area_lights.rs: SPHERE_SIDES).
+// The sides of the polygon a sphere's disc is drawn as (area_lights.rs: SPHERE_SIDES; the
+// corners below are its eighths of a turn).
 const uint SPHERE_SIDES = 8u;
 
 struct AreaPolygon {
@@ -54,28 +55,52 @@ Ltc ltc_lookup(float roughness, float n_dot_v) {
     return Ltc(inverse, e.x, e.y);
 }
 
-// Corner k of a polygon, seen from p (world). A sphere shows p the disc across it of the same
-// solid angle: a regular polygon of SPHERE_SIDES sides with the disc's area, facing p.
-vec3 area_corner(AreaPolygon poly, uint k, vec3 p) {
-    vec4 v = area_vertices[poly.range.x + (poly.range.z == AREA_SPHERE ? 0u : k)];
-    if (poly.range.z != AREA_SPHERE) return v.xyz;
-    vec3 d = v.xyz - p;
-    float dist = max(length(d), v.w * 1.0001);
-    vec3 w = d / max(length(d), 1e-30);
-    // The cone's half angle asin(r / dist); the disc through the centre that fills it.
-    float r = v.w * dist / sqrt(dist * dist - v.w * v.w);
-    // A regular polygon has sides/(2 pi) sin(2 pi/sides) of its circle's area.
-    const float ANGLE = 2.0 * PI / float(SPHERE_SIDES);
-    r *= sqrt(ANGLE / sin(ANGLE));
-    vec3 u = normalize(cross(w, abs(w.y) < 0.99 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
-    vec3 t = cross(w, u);
-    // Counter-clockwise seen from p (its front faces p).
-    float a = ANGLE * float(k);
-    return v.xyz + r * (cos(a) * u - sin(a) * t);
+// A polygon as p sees it. A sphere shows p the disc across it of the same solid angle: a
+// regular polygon of SPHERE_SIDES sides with the disc's area, facing p.
+struct Outline {
+    uint first;    // first corner (polygons)
+    uint count;
+    bool sphere;
+    vec3 centre;   // sphere: the disc's centre and its two axes (radius included)
+    vec3 u;
+    vec3 t;
+};
+
+Outline area_outline(AreaPolygon poly, vec3 p) {
+    Outline o;
+    o.first = poly.range.x;
+    o.sphere = poly.range.z == AREA_SPHERE;
+    o.count = o.sphere ? SPHERE_SIDES : poly.range.y;
+    o.centre = vec3(0.0);
+    o.u = vec3(0.0);
+    o.t = vec3(0.0);
+    if (o.sphere) {
+        vec4 v = area_vertices[poly.range.x];
+        vec3 d = v.xyz - p;
+        float len = length(d);
+        float dist = max(len, v.w * 1.0001);
+        vec3 w = d / max(len, 1e-30);
+        // The cone's half angle asin(r / dist); the disc through the centre that fills it. A
+        // regular polygon has sides / (2 pi) sin(2 pi / sides) of its circle's area.
+        const float ANGLE = 2.0 * PI / float(SPHERE_SIDES);
+        float r = v.w * dist / sqrt(dist * dist - v.w * v.w) * sqrt(ANGLE / sin(ANGLE));
+        vec3 u = normalize(cross(w, abs(w.y) < 0.99 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
+        o.centre = v.xyz;
+        o.u = r * u;
+        o.t = r * cross(w, u);
+    }
+    return o;
 }
 
-uint area_corner_count(AreaPolygon poly) {
-    return poly.range.z == AREA_SPHERE ? SPHERE_SIDES : poly.range.y;
+// Corner k (world), counter-clockwise seen from the front (a sphere's disc faces p).
+vec3 outline_corner(Outline o, uint k) {
+    if (!o.sphere) return area_vertices[o.first + k].xyz;
+    // cos and sin of k eighths of a turn.
+    const float H = 0.70710678;
+    const vec2 TURN[8] = vec2[8](vec2(1.0, 0.0), vec2(H, H), vec2(0.0, 1.0), vec2(-H, H),
+                                 vec2(-1.0, 0.0), vec2(-H, -H), vec2(0.0, -1.0), vec2(H, -H));
+    vec2 c = TURN[k];
+    return o.centre + c.x * o.u - c.y * o.t;
 }
 
 // Which side of the polygon p is on: +1 in front, -1 behind, 0 in its plane. A sphere's disc
@@ -99,9 +124,9 @@ vec3 edge_term(vec3 a, vec3 b) {
 // The clip walks the outline once: an edge leaving the upper side ends at the horizon, and the
 // horizon's arc to where the outline comes back closes it (in any order: arcs along the
 // horizon add up).
-float clipped_edge_sum(AreaPolygon poly, vec3 p, mat3 local) {
-    uint n = area_corner_count(poly);
-    vec3 first = local * (area_corner(poly, 0u, p) - p);
+float clipped_edge_sum(Outline o, vec3 p, mat3 local) {
+    uint n = o.count;
+    vec3 first = local * (outline_corner(o, 0u) - p);
     vec3 a = first;
     float sum = 0.0;
     vec3 exit_point = vec3(0.0);
@@ -109,7 +134,7 @@ float clipped_edge_sum(AreaPolygon poly, vec3 p, mat3 local) {
     bool exited = false;
     bool entered_first = false;
     for (uint k = 0u; k < n; k++) {
-        vec3 b = k + 1u == n ? first : local * (area_corner(poly, k + 1u, p) - p);
+        vec3 b = k + 1u == n ? first : local * (outline_corner(o, k + 1u) - p);
         bool a_up = a.z >= 0.0;
         bool b_up = b.z >= 0.0;
         if (a_up && b_up) {
@@ -160,7 +185,7 @@ float area_form_factor(Light light, vec3 p, mat3 local) {
         float side = area_side(poly, p);
         if (side == 0.0 || (side < 0.0 && !two_sided)) continue;
         // A front face turns clockwise around the lobe's axis seen from p: negative sums.
-        f += -side * clipped_edge_sum(poly, p, local);
+        f += -side * clipped_edge_sum(area_outline(poly, p), p, local);
     }
     return max(f, 0.0) / (2.0 * PI);
 }
@@ -207,12 +232,12 @@ vec3 area_vector_form_factor(Light light, vec3 p) {
         AreaPolygon poly = area_polygons[first + i];
         float side = area_side(poly, p);
         if (side == 0.0 || (side < 0.0 && !two_sided)) continue;
-        uint n = area_corner_count(poly);
-        vec3 first_corner = area_corner(poly, 0u, p) - p;
+        Outline o = area_outline(poly, p);
+        vec3 first_corner = outline_corner(o, 0u) - p;
         vec3 a = first_corner;
         vec3 sum = vec3(0.0);
-        for (uint k = 0u; k < n; k++) {
-            vec3 b = k + 1u == n ? first_corner : area_corner(poly, k + 1u, p) - p;
+        for (uint k = 0u; k < o.count; k++) {
+            vec3 b = k + 1u == o.count ? first_corner : outline_corner(o, k + 1u) - p;
             sum += edge_term(a, b);
             a = b;
         }

@@ -220,7 +220,7 @@ pub static CASES: &[Case] = &[
         what: "the classic Cornell box lit only by its 13 x 10.5 cm two-sided ceiling quad; \
                relMSE against the reference",
         metric: "relMSE",
-        goal: Goal::AtMost(0.01),
+        goal: REF_GOAL,
         run: |env, gi| {
             let (b, cam) = cornell_quad_light();
             let s = env.load("area-cornell", &b)?;
@@ -233,7 +233,7 @@ pub static CASES: &[Case] = &[
         what: "a 4 x 2.5 x 4 m room lit only by two emissive spheres and two cubes 15 to 25 \
                cm across; relMSE against the reference",
         metric: "relMSE",
-        goal: Goal::AtMost(0.03),
+        goal: REF_GOAL,
         run: |env, gi| {
             let (b, cam) = emitter_room();
             let s = env.load("area-room", &b)?;

@@ -562,3 +562,46 @@ pub fn emitter_room() -> (SceneBuilder, Camera) {
     add_camera_node(&mut b, &camera);
     (b, camera)
 }
+
+/// The room of [`emitter_room`] without its emitters, lit instead by `n` emissive spheres of
+/// 12 cm (528 triangles each) on a grid 40 cm under the ceiling: the area lights' cost as their
+/// number grows.
+pub fn emitter_grid(n: usize) -> (SceneBuilder, Camera) {
+    let mut b = SceneBuilder::new();
+    let wall = b.add_material(MaterialDesc::lambertian("wall", [0.7, 0.68, 0.62]));
+    let wood = b.add_material(MaterialDesc::lambertian("floor", [0.4, 0.28, 0.18]));
+    let (lo, hi) = ([-2.0, 0.0, -2.0], [2.0, 2.5, 2.0]);
+    let mut faces = Vec::new();
+    for axis in 0..3 {
+        for (side, at) in [(1.0, lo[axis]), (-1.0, hi[axis])] {
+            if axis != 1 || side < 0.0 {
+                faces.push(slab_face(lo, hi, axis, at, side, wall));
+            }
+        }
+    }
+    let walls = b.add_mesh(
+        "room",
+        vec![merge(&faces), slab_face(lo, hi, 1, lo[1], 1.0, wood)],
+    );
+    b.add_node(NodeDesc::new("room").mesh(walls));
+    let side = (n as f32).sqrt().ceil() as usize;
+    let m = b.add_material(MaterialDesc::lambertian("lamp", [0.8; 3]).emissive([1.0; 3], 40.0));
+    let sphere = b.add_mesh("lamp", vec![uv_sphere(0.06, 12, 24, m)]);
+    for k in 0..n {
+        let (i, j) = (k % side, k / side);
+        let at = |i: usize| -1.6 + 3.2 * (i as f32 + 0.5) / side as f32;
+        b.add_node(
+            NodeDesc::new(&format!("lamp {k}"))
+                .mesh(sphere)
+                .translation([at(i), 2.1, at(j)]),
+        );
+    }
+    let camera = look_at(
+        Vec3::new(0.0, 1.4, 1.9),
+        Vec3::new(0.0, 0.8, -1.0),
+        60.0,
+        0.01,
+    );
+    add_camera_node(&mut b, &camera);
+    (b, camera)
+}
