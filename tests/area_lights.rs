@@ -807,3 +807,79 @@ fn a_quad_light_that_moves_for_ten_frames_stays_finite_and_ends_where_it_is_buil
         "relMSE {err} against the light built where it ends"
     );
 }
+
+#[test]
+fn a_textured_emitter_lights_as_its_textures_mean() {
+    // A 60 cm quad light whose emissive texture is half white, half black (Le 10 where white):
+    // the light it casts is its mean, 5, over the whole quad (the G-buffer still shows the
+    // halves). The floor gets 0.8 x 5 x F(quad) within 1%; against the true light of the
+    // white half alone, the error falls with the distance (printed, docs/area-lights.md).
+    let (h, y) = (0.3f32, 0.5f32);
+    let mut s = lamp_over_floor(3.0, h, y, 10.0);
+    s.textures.push(voxgi::scene::Texture {
+        name: "halves".into(),
+        width: 2,
+        height: 1,
+        rgba8: vec![255, 255, 255, 255, 0, 0, 0, 255],
+        srgb: false,
+        wrap_s: voxgi::scene::Wrap::ClampToEdge,
+        wrap_t: voxgi::scene::Wrap::ClampToEdge,
+        mag_nearest: true,
+        min_nearest: true,
+    });
+    let lamp = s.instances[1].primitive as usize;
+    let m = s.primitives[lamp].material as usize;
+    s.materials[m].emissive_tex = Some(voxgi::scene::TexRef {
+        texture: 0,
+        tex_coord: 0,
+    });
+    top_camera(&mut s, HEIGHT, FOV);
+    let img = render(&s, direct_settings());
+    // lamp_over_floor's corners, u from the first to the second: the white half is z > 0.
+    let whole: Vec<DVec3> = [(-h, h), (-h, -h), (h, -h), (h, h)]
+        .iter()
+        .map(|&(x, z)| DVec3::new(x as f64, y as f64, z as f64))
+        .collect();
+    let white: Vec<DVec3> = [(-h, h), (-h, 0.0), (h, 0.0), (h, h)]
+        .iter()
+        .map(|&(x, z)| DVec3::new(x as f64, y as f64, z as f64))
+        .collect();
+    let eye = DVec3::new(0.0, HEIGHT as f64, 0.0);
+    let tris: Vec<[DVec3; 3]> = vec![
+        [whole[0], whole[1], whole[2]],
+        [whole[0], whole[2], whole[3]],
+    ];
+    let (mut worst_mean, mut near, mut far) = (0.0f64, 0.0f64, 0.0f64);
+    for py in 0..FF_SIZE {
+        for px in 0..FF_SIZE {
+            let p = top_pixel_to_floor(px, py, FF_SIZE, FF_SIZE, HEIGHT, FOV).as_dvec3();
+            if ray_hits(eye, p, &tris) {
+                continue;
+            }
+            let got = img.at(px, py)[0] as f64;
+            let mean = 0.8 * 5.0 * exact_form_factor(p, &whole);
+            let truth = 0.8 * 10.0 * exact_form_factor(p, &white);
+            if mean > 1e-3 {
+                worst_mean = worst_mean.max((got / mean - 1.0).abs());
+            }
+            if truth > 1e-3 {
+                let off = (got / truth - 1.0).abs();
+                let d = p.length() / (2.0 * h as f64);
+                if d < 1.0 {
+                    near = near.max(off);
+                } else if d > 3.0 {
+                    far = far.max(off);
+                }
+            }
+        }
+    }
+    eprintln!(
+        "textured emitter: the mean within {worst_mean:.4}; against the true light {near:.3} \
+         within one light width of its axis, {far:.3} beyond three"
+    );
+    assert!(
+        worst_mean < 0.01,
+        "the floor is {worst_mean} off the mean's light"
+    );
+    assert!(far < near, "far {far}, near {near}");
+}
