@@ -190,40 +190,33 @@ float area_form_factor(Light light, vec3 p, mat3 local) {
     return max(f, 0.0) / (2.0 * PI);
 }
 
-// Whether p lies within `reach` of the light's surface (inside a sphere's). A voxel the light
-// passes through is the light itself or what it hides: a ceiling 1 mm above a two-sided panel
-// is lit by its back, but only the gap sees that, while the voxel would send it everywhere.
-bool area_light_near(Light light, vec3 p, float reach) {
-    if (length(p - light.position_type.xyz) > light.direction_range.w + reach) return false;
-    uint first = uint(light.cone.x);
-    uint count = uint(light.cone.y);
-    for (uint i = 0u; i < count; i++) {
-        AreaPolygon poly = area_polygons[first + i];
-        if (poly.range.z == AREA_SPHERE) {
-            vec4 s = area_vertices[poly.range.x];
-            if (length(p - s.xyz) < s.w + reach) return true;
-            continue;
-        }
-        vec3 n = poly.plane.xyz;
-        if (abs(dot(n, p) - poly.plane.w) >= reach) continue;
-        // Within reach of the outline on its inner side (convex outlines).
-        bool inside = true;
-        uint m = poly.range.y;
-        for (uint k = 0u; k < m && inside; k++) {
-            vec3 a = area_vertices[poly.range.x + k].xyz;
-            vec3 b = area_vertices[poly.range.x + (k + 1u) % m].xyz;
-            vec3 inward = cross(n, b - a);
-            inside = dot(inward, p - a) >= -reach * length(inward);
-        }
-        if (inside) return true;
+// Whether p lies within `reach` of a polygon (inside a sphere's, or within reach of its
+// surface).
+bool polygon_near(AreaPolygon poly, vec3 p, float reach) {
+    if (poly.range.z == AREA_SPHERE) {
+        vec4 s = area_vertices[poly.range.x];
+        return length(p - s.xyz) < s.w + reach;
     }
-    return false;
+    vec3 n = poly.plane.xyz;
+    if (abs(dot(n, p) - poly.plane.w) >= reach) return false;
+    // Within reach of the outline on its inner side (convex outlines).
+    uint m = poly.range.y;
+    for (uint k = 0u; k < m; k++) {
+        vec3 a = area_vertices[poly.range.x + k].xyz;
+        vec3 b = area_vertices[poly.range.x + (k + 1u) % m].xyz;
+        vec3 inward = cross(n, b - a);
+        if (dot(inward, p - a) < -reach * length(inward)) return false;
+    }
+    return true;
 }
 
 // The vector form factor of the light's polygons (unclipped): for any normal above all of
 // them, dot(normal, it) is the form factor; its direction is where the light comes from on
-// average. For the voxels' normal-weighted lighting.
-vec3 area_vector_form_factor(Light light, vec3 p) {
+// average. For the voxels' normal-weighted lighting. Polygons within `reach` of p are left
+// out: a voxel a polygon passes through is the light itself or what it hides (a ceiling 1 mm
+// above a two-sided panel is lit by its back, but only the gap sees that, while the voxel
+// would send it down every cone); the other faces of a closed light still light it.
+vec3 area_vector_form_factor(Light light, vec3 p, float reach) {
     uint first = uint(light.cone.x);
     uint count = uint(light.cone.y);
     bool two_sided = light.radiance.w > 0.5;
@@ -232,6 +225,7 @@ vec3 area_vector_form_factor(Light light, vec3 p) {
         AreaPolygon poly = area_polygons[first + i];
         float side = area_side(poly, p);
         if (side == 0.0 || (side < 0.0 && !two_sided)) continue;
+        if (reach > 0.0 && polygon_near(poly, p, reach)) continue;
         Outline o = area_outline(poly, p);
         vec3 first_corner = outline_corner(o, 0u) - p;
         vec3 a = first_corner;

@@ -78,12 +78,10 @@ void main() {
     vec3 lit_side = vec3(0.0);
     for (uint i = 0u; i < frame.counts.x; i++) {
         Light light = lights[i];
-#ifndef PAPER
-        if (uint(light.position_type.w) == LIGHT_AREA && area_light_near(light, p, vs)) continue;
-#endif
         vec3 l;
         float dist;
-        vec3 e = light_irradiance(light, p, l, dist);
+        // An area light's polygons do not light the voxels they pass through.
+        vec3 e = light_irradiance_near(light, p, vs, l, dist);
         // Normal-weighted attenuation: per axis, the light along that axis on the side the
         // surface faces, weighted by how much the surface faces that axis. A two-sided voxel
         // faces both ways.

@@ -3,8 +3,9 @@
 #define LIGHTS_GLSL
 #include "area_lights.glsl"
 
-// Irradiance on a surface facing the light, and the unit direction towards the light.
-vec3 light_irradiance(Light light, vec3 p, out vec3 to_light, out float dist) {
+// Irradiance on a surface facing the light, and the unit direction towards the light. An area
+// light's polygons within `reach` of p give it nothing (area_vector_form_factor).
+vec3 light_irradiance_near(Light light, vec3 p, float reach, out vec3 to_light, out float dist) {
     uint type = uint(light.position_type.w);
     if (type == LIGHT_DIRECTIONAL) {
         to_light = -light.direction_range.xyz;
@@ -18,7 +19,7 @@ vec3 light_irradiance(Light light, vec3 p, out vec3 to_light, out float dist) {
     if (type == LIGHT_AREA) {
         // Where the light comes from on average and the irradiance facing it (the pixels
         // integrate it exactly instead: deferred_lighting.comp).
-        vec3 f = area_vector_form_factor(light, p);
+        vec3 f = area_vector_form_factor(light, p, reach);
         float l = length(f);
         if (l > 0.0) to_light = f / l;
         return light.radiance.rgb * (PI * l);
@@ -37,6 +38,10 @@ vec3 light_irradiance(Light light, vec3 p, out vec3 to_light, out float dist) {
         atten *= a * a;
     }
     return light.radiance.rgb * atten;
+}
+
+vec3 light_irradiance(Light light, vec3 p, out vec3 to_light, out float dist) {
+    return light_irradiance_near(light, p, 0.0, to_light, dist);
 }
 
 // Which of a point light's six cube views (+X, -X, +Y, -Y, +Z, -Z) sees direction d.
