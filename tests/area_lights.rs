@@ -458,7 +458,8 @@ fn a_quad_a_triangle_and_a_disc_give_the_floor_their_exact_form_factors() {
         .collect();
     let poly = |v: &[Vec3]| -> Vec<DVec3> { v.iter().map(|p| p.as_dvec3()).collect() };
     let (q, t) = (poly(&quad), poly(&tri));
-    let cases: [(&str, Vec<[Vec3; 3]>, Box<dyn Fn(DVec3) -> f64>); 3] = [
+    type Exact = Box<dyn Fn(DVec3) -> f64>;
+    let cases: [(&str, Vec<[Vec3; 3]>, Exact); 3] = [
         (
             "quad",
             quad_tris(quad),

@@ -517,7 +517,9 @@ pub fn emitter_room() -> (SceneBuilder, Camera) {
             .translation([1.0, 0.9, -0.9])
             .scale([0.4, 1.8, 0.4]),
     );
-    let emitters: [(&str, [f32; 3], f32, bool, [f32; 3]); 4] = [
+    // Name, colour, size, a sphere (else a cube), where.
+    type Emitter = (&'static str, [f32; 3], f32, bool, [f32; 3]);
+    let emitters: [Emitter; 4] = [
         (
             "warm sphere",
             [1.0, 0.75, 0.45],

@@ -319,7 +319,8 @@ pub fn shape_of(triangles: &[[Vec3; 3]]) -> Option<Shape> {
         let cross = (t[1] - t[0]).cross(t[2] - t[0]);
         let twice = cross.length();
         let c = t.map(&mut id);
-        if !(twice > weld * weld) || c[0] == c[1] || c[1] == c[2] || c[0] == c[2] {
+        let degenerate = twice.is_nan() || twice <= weld * weld;
+        if degenerate || c[0] == c[1] || c[1] == c[2] || c[0] == c[2] {
             continue;
         }
         let n = cross / twice;
@@ -439,10 +440,7 @@ fn outlines(group: &[[u32; 3]], points: &[Vec3], normal: Vec3) -> Vec<Polygon> {
         while next.get(&s).is_some_and(|v| !v.is_empty()) {
             let mut ids = vec![s];
             let mut at = s;
-            loop {
-                let Some(b) = next.get_mut(&at).and_then(|v| v.pop()) else {
-                    break;
-                };
+            while let Some(b) = next.get_mut(&at).and_then(|v| v.pop()) {
                 if b == s {
                     break;
                 }
