@@ -9,6 +9,8 @@ use voxgi::gi::GiSettings;
 use voxgi::render::{Mode, RenderSettings, Renderer};
 use voxgi::scene::{Material, Scene};
 
+/// These tests measure the voxels' own emission and bounces: emitters stay in the voxels
+/// (area lights take them out and light the pixels exactly: tests/area_lights.rs).
 fn settings(mode: Mode, voxels: u32, size: u32) -> RenderSettings {
     RenderSettings {
         width: size,
@@ -17,6 +19,7 @@ fn settings(mode: Mode, voxels: u32, size: u32) -> RenderSettings {
         mode,
         gi: GiSettings {
             voxels,
+            area_lights: false,
             ..Default::default()
         },
         ..Default::default()
@@ -300,9 +303,8 @@ fn a_small_emitter_in_the_voxels_sends_the_floor_its_own_light() {
     let size = 48;
     let mut set = settings(Mode::Indirect, 64, size);
     set.gi.bounces = 1;
-    // The voxels' path, which emitters that do not become lights take (past the fourth, or
-    // textured).
-    set.gi.area_lights = false;
+    // The voxels' path, which emitters that do not become area lights take (past the eighth,
+    // or meshes of more than 64 outline edges that are not spheres).
     let img = render(&s, set);
     let area = (2.0 * half) * (2.0 * half);
     let (mut got, mut want) = (0.0f64, 0.0f64);
@@ -443,7 +445,7 @@ fn the_tail_adds_the_bounces_not_traced_as_a_geometric_series() {
 }
 
 #[test]
-fn a_double_sided_area_lights_both_of_its_sides() {
+fn a_double_sided_emitter_lights_both_of_its_sides() {
     // The emissive square of the test above, 1 m over the floor, three ways: facing the floor;
     // facing up but double-sided (CONVENTIONS.md: it emits from both faces, so the floor must
     // get the same light; it got the one-sided emitter's when the back face's emission shared

@@ -8,10 +8,10 @@
 //! bounces carry it, and its emission leaves the voxels (the G-buffer still shows it).
 //!
 //! Shapes: the primitive's triangles grouped by plane into polygons (their outlines: a quad is
-//! one polygon of four edges, a box six); a closed mesh whose vertices lie on a sphere (or any
-//! closed mesh with more than [`MAX_EDGES`] edges, as the sphere of its area) is a sphere, which
-//! a point sees as the disc of the same solid angle. An open curved mesh with more edges stays
-//! in the voxels.
+//! one polygon of four edges, a box six); a closed mesh whose vertices lie on a sphere is a
+//! sphere, which
+//! a point sees as the disc of the same solid angle. Any other mesh with more edges stays in
+//! the voxels.
 
 use crate::scene::{AlphaMode, Material, Scene};
 use glam::{Mat4, Vec3};
@@ -288,8 +288,8 @@ pub fn find(scene: &Scene) -> Vec<AreaLight> {
     found
 }
 
-/// The shape of a primitive's triangles (object space), or None when it has no area or is an
-/// open curved surface of more than [`MAX_EDGES`] outline edges.
+/// The shape of a primitive's triangles (object space), or None when it has no area or is
+/// neither a sphere nor a mesh of at most [`MAX_EDGES`] outline edges.
 pub fn shape_of(triangles: &[[Vec3; 3]]) -> Option<Shape> {
     let (lo, hi) = triangles
         .iter()
@@ -352,14 +352,8 @@ pub fn shape_of(triangles: &[[Vec3; 3]]) -> Option<Shape> {
         // A sphere as its disc is exact and costs SPHERE_SIDES edges.
         Some(s) if closed && edges > SPHERE_SIDES => Some(s),
         _ if edges <= MAX_EDGES => Some(Shape::Polygons(polygons)),
-        // Any other closed mesh: the sphere of its area, about its centre.
-        _ if closed => {
-            let centre = area_centre(&tris, &points);
-            Some(Shape::Sphere {
-                centre,
-                radius: (area / (4.0 * std::f32::consts::PI)).sqrt(),
-            })
-        }
+        // Anything else (a lamp's body whose emissive texture lights a bulb) stays in the
+        // voxels: as the sphere of its area it lit LightsPunctualLamp from the wrong place.
         _ => None,
     }
 }
