@@ -44,6 +44,18 @@ vec3 light_irradiance(Light light, vec3 p, out vec3 to_light, out float dist) {
     return light_irradiance_near(light, p, 0.0, to_light, dist);
 }
 
+// Where a shadow view sees q: its uv and depth; false when it cannot (behind the view or
+// beyond its far plane).
+bool shadow_coords(ShadowView sv, vec3 q, out vec2 uv, out float depth) {
+    vec4 c = sv.view_proj * vec4(q, 1.0);
+    if (c.w <= 0.0) return false;
+    vec3 ndc = c.xyz / c.w;
+    if (ndc.z > 1.0) return false;
+    uv = vec2(0.5 + 0.5 * ndc.x, 0.5 - 0.5 * ndc.y);
+    depth = ndc.z;
+    return true;
+}
+
 // Which of a point light's six cube views (+X, -X, +Y, -Y, +Z, -Z) sees direction d.
 uint cube_face(vec3 d) {
     vec3 a = abs(d);
@@ -66,16 +78,14 @@ float shadow_visibility(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow sh
     if (sv.info.x > 0.5) {
         // Perspective: the texel footprint grows with depth along the view axis.
         vec3 rel = p - light.position_type.xyz;
-        float depth = count == 6u ? max(max(abs(rel.x), abs(rel.y)), abs(rel.z))
+        float along = count == 6u ? max(max(abs(rel.x), abs(rel.y)), abs(rel.z))
                                   : dot(rel, light.direction_range.xyz);
-        texel *= max(depth, 0.0);
+        texel *= max(along, 0.0);
     }
     vec3 q = p + geo_n * texel * frame.shadow.y;
-    vec4 c = sv.view_proj * vec4(q, 1.0);
-    if (c.w <= 0.0) return 1.0;
-    vec3 ndc = c.xyz / c.w;
-    if (ndc.z > 1.0) return 1.0;
-    vec2 uv = vec2(0.5 + 0.5 * ndc.x, 0.5 - 0.5 * ndc.y);
+    vec2 uv;
+    float depth;
+    if (!shadow_coords(sv, q, uv, depth)) return 1.0;
     if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return 1.0;
 
     float res = frame.shadow.x;
@@ -85,7 +95,7 @@ float shadow_visibility(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow sh
     for (int y = -radius; y <= radius; y++) {
         for (int x = -radius; x <= radius; x++) {
             vec2 o = vec2(x, y) / res;
-            sum += texture(shadow_map, vec4(uv + o, float(view), ndc.z));
+            sum += texture(shadow_map, vec4(uv + o, float(view), depth));
             n += 1.0;
         }
     }
@@ -135,11 +145,9 @@ float area_shadow(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow shadow_m
     float receiver = max(max(abs(rel.x), abs(rel.y)), abs(rel.z));
     float texel = sv.info.y * receiver;  // metres per texel at p's depth
     vec3 q = p + geo_n * texel * frame.shadow.y;
-    vec4 c = sv.view_proj * vec4(q, 1.0);
-    if (c.w <= 0.0) return 1.0;
-    vec3 ndc = c.xyz / c.w;
-    if (ndc.z > 1.0) return 1.0;
-    vec2 uv = vec2(0.5 + 0.5 * ndc.x, 0.5 - 0.5 * ndc.y);
+    vec2 uv;
+    float depth;
+    if (!shadow_coords(sv, q, uv, depth)) return 1.0;
     float res = frame.shadow.x;
     // The widest filter the views are widened for (shadows.rs: SOFT_SHADOW_SHARE).
     float widest = max(frame.shadow.w, 1.0);
@@ -148,7 +156,7 @@ float area_shadow(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow shadow_m
     float far = sv.info.w;
     // Wide filters reach across the receiver itself: each tap compares against the receiver's
     // plane there (its depth is affine in the view's uv), not against p's depth.
-    vec2 slope = receiver_slope(sv.view_proj, q, geo_n, texel, uv, ndc.z);
+    vec2 slope = receiver_slope(sv.view_proj, q, geo_n, texel, uv, depth);
     float bias = 2.0 / res * (abs(slope.x) + abs(slope.y)) + 1e-6;
 
     // Blockers: 16 taps over the light's radius as seen at p's depth.
@@ -158,7 +166,7 @@ float area_shadow(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow shadow_m
     for (int i = 0; i < 16; i++) {
         vec2 o = vogel_disc(i, 16) * search / res;
         float d = texture(shadow_depth, vec3(uv + o, float(view))).r;
-        if (d < ndc.z + dot(slope, o) - bias) {
+        if (d < depth + dot(slope, o) - bias) {
             blockers += near * far / (far - d * (far - near));
             found += 1.0;
         }
@@ -172,7 +180,7 @@ float area_shadow(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow shadow_m
     float sum = 0.0;
     for (int i = 0; i < 32; i++) {
         vec2 o = vogel_disc(i, 32) * penumbra / res;
-        sum += texture(shadow_map, vec4(uv + o, float(view), ndc.z + dot(slope, o) - bias));
+        sum += texture(shadow_map, vec4(uv + o, float(view), depth + dot(slope, o) - bias));
     }
     return sum / 32.0;
 }

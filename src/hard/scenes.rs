@@ -479,16 +479,11 @@ pub fn uv_sphere(radius: f32, rings: u32, segments: u32, material: usize) -> Pri
     }
 }
 
-/// A 4 x 2.5 x 4 m closed room (pale walls and ceiling, a wooden floor) with a table and a
-/// pillar, lit only by four small coloured
-/// emitters, 15 to 25 cm across (2 to 4 voxels at 64^3): two spheres and two cubes. The
-/// camera stands inside by the front wall.
-pub fn emitter_room() -> (SceneBuilder, Camera) {
-    let mut b = SceneBuilder::new();
-    let white = b.add_material(MaterialDesc::lambertian("white", WHITE));
+/// A closed 4 x 2.5 x 4 m room, pale walls and ceiling (albedo 0.7) and a wooden floor (0.4,
+/// 0.28, 0.18): the rooms the area lights' cases are lit in.
+fn living_room(b: &mut SceneBuilder) {
     let wall = b.add_material(MaterialDesc::lambertian("wall", [0.7, 0.68, 0.62]));
     let wood = b.add_material(MaterialDesc::lambertian("floor", [0.4, 0.28, 0.18]));
-    let blue = b.add_material(MaterialDesc::lambertian("blue", [0.2, 0.3, 0.7]));
     let (lo, hi) = ([-2.0, 0.0, -2.0], [2.0, 2.5, 2.0]);
     let mut faces = Vec::new();
     for axis in 0..3 {
@@ -503,6 +498,17 @@ pub fn emitter_room() -> (SceneBuilder, Camera) {
         vec![merge(&faces), slab_face(lo, hi, 1, lo[1], 1.0, wood)],
     );
     b.add_node(NodeDesc::new("room").mesh(walls));
+}
+
+/// A 4 x 2.5 x 4 m closed room (pale walls and ceiling, a wooden floor) with a table and a
+/// pillar, lit only by four small coloured
+/// emitters, 15 to 25 cm across (2 to 4 voxels at 64^3): two spheres and two cubes. The
+/// camera stands inside by the front wall.
+pub fn emitter_room() -> (SceneBuilder, Camera) {
+    let mut b = SceneBuilder::new();
+    let white = b.add_material(MaterialDesc::lambertian("white", WHITE));
+    living_room(&mut b);
+    let blue = b.add_material(MaterialDesc::lambertian("blue", [0.2, 0.3, 0.7]));
     let cube = b.add_mesh("block", vec![unit_cube(Some(white))]);
     b.add_node(
         NodeDesc::new("table")
@@ -570,22 +576,7 @@ pub fn emitter_room() -> (SceneBuilder, Camera) {
 /// number grows.
 pub fn emitter_grid(n: usize) -> (SceneBuilder, Camera) {
     let mut b = SceneBuilder::new();
-    let wall = b.add_material(MaterialDesc::lambertian("wall", [0.7, 0.68, 0.62]));
-    let wood = b.add_material(MaterialDesc::lambertian("floor", [0.4, 0.28, 0.18]));
-    let (lo, hi) = ([-2.0, 0.0, -2.0], [2.0, 2.5, 2.0]);
-    let mut faces = Vec::new();
-    for axis in 0..3 {
-        for (side, at) in [(1.0, lo[axis]), (-1.0, hi[axis])] {
-            if axis != 1 || side < 0.0 {
-                faces.push(slab_face(lo, hi, axis, at, side, wall));
-            }
-        }
-    }
-    let walls = b.add_mesh(
-        "room",
-        vec![merge(&faces), slab_face(lo, hi, 1, lo[1], 1.0, wood)],
-    );
-    b.add_node(NodeDesc::new("room").mesh(walls));
+    living_room(&mut b);
     let side = (n as f32).sqrt().ceil() as usize;
     let m = b.add_material(MaterialDesc::lambertian("lamp", [0.8; 3]).emissive([1.0; 3], 40.0));
     let sphere = b.add_mesh("lamp", vec![uv_sphere(0.06, 12, 24, m)]);
