@@ -214,20 +214,11 @@ fn emission(scene: &Scene, m: &Material) -> Vec3 {
     };
     let texels = t.rgba8.chunks_exact(4);
     let n = texels.len().max(1) as f64;
-    let decode = |c: u8| {
-        let c = c as f64 / 255.0;
-        if !t.srgb {
-            c
-        } else if c <= 0.04045 {
-            c / 12.92
-        } else {
-            ((c + 0.055) / 1.055).powf(2.4)
-        }
-    };
+    let linear = t.linear_table();
     let mut sum = [0.0f64; 3];
     for px in texels {
         for k in 0..3 {
-            sum[k] += decode(px[k]);
+            sum[k] += linear[px[k] as usize] as f64;
         }
     }
     m.emissive * Vec3::new(sum[0] as f32, sum[1] as f32, sum[2] as f32) / n as f32

@@ -151,18 +151,7 @@ impl GpuScene {
 
 /// The mip chain of an RGBA8 image by 2x2 box filtering (in linear light for sRGB data).
 pub fn mip_chain(tex: &Texture) -> Vec<(u32, u32, Vec<u8>)> {
-    let to_linear: Vec<f32> = (0..256)
-        .map(|i| {
-            let c = i as f32 / 255.0;
-            if !tex.srgb {
-                c
-            } else if c <= 0.04045 {
-                c / 12.92
-            } else {
-                ((c + 0.055) / 1.055).powf(2.4)
-            }
-        })
-        .collect();
+    let to_linear = tex.linear_table();
     let encode = |v: f32| -> u8 {
         let v = v.clamp(0.0, 1.0);
         let e = if !tex.srgb {

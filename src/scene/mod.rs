@@ -153,6 +153,24 @@ pub struct Texture {
     pub min_nearest: bool,
 }
 
+impl Texture {
+    /// Each byte value's linear light: decoded from sRGB where the texture holds sRGB.
+    pub fn linear_table(&self) -> Vec<f32> {
+        (0..256)
+            .map(|i| {
+                let c = i as f32 / 255.0;
+                if !self.srgb {
+                    c
+                } else if c <= 0.04045 {
+                    c / 12.92
+                } else {
+                    ((c + 0.055) / 1.055).powf(2.4)
+                }
+            })
+            .collect()
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum LightKind {
     Directional,
