@@ -203,6 +203,98 @@ pub fn mip_chain(tex: &Texture) -> Vec<(u32, u32, Vec<u8>)> {
     levels
 }
 
+/// The materials as the shaders read them (a default one when the scene has none).
+fn material_buffer(ctx: &Arc<Context>, scene: &Scene) -> VkResult<Buffer> {
+    let mats: Vec<GpuMaterial> = scene
+        .materials
+        .iter()
+        .map(GpuMaterial::from_material)
+        .collect();
+    let mats = if mats.is_empty() {
+        vec![GpuMaterial::default()]
+    } else {
+        mats
+    };
+    Buffer::with_data(
+        ctx,
+        "materials",
+        as_bytes(&mats),
+        vk::BufferUsageFlags::STORAGE_BUFFER,
+    )
+}
+
+/// The 1x1 white texture bound wherever a material has none.
+fn white_texture() -> Texture {
+    Texture {
+        name: "white".into(),
+        width: 1,
+        height: 1,
+        rgba8: vec![255; 4],
+        srgb: false,
+        wrap_s: Wrap::Repeat,
+        wrap_t: Wrap::Repeat,
+        mag_nearest: false,
+        min_nearest: false,
+    }
+}
+
+/// The copy of one mip level from the staging buffer at `offset`.
+fn mip_copy(offset: u64, level: u32, width: u32, height: u32) -> vk::BufferImageCopy {
+    vk::BufferImageCopy::default()
+        .buffer_offset(offset)
+        .image_subresource(vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: level,
+            base_array_layer: 0,
+            layer_count: 1,
+        })
+        .image_extent(vk::Extent3D {
+            width,
+            height,
+            depth: 1,
+        })
+}
+
+/// The sampler of a texture's wrap and filter modes: one per distinct set, made on first use.
+fn sampler_for(
+    ctx: &Arc<Context>,
+    t: &Texture,
+    keys: &mut HashMap<(i32, i32, bool, bool), usize>,
+    samplers: &mut Vec<Sampler>,
+) -> VkResult<usize> {
+    let key = (
+        address_mode(t.wrap_s).as_raw(),
+        address_mode(t.wrap_t).as_raw(),
+        t.mag_nearest,
+        t.min_nearest,
+    );
+    if let Some(&i) = keys.get(&key) {
+        return Ok(i);
+    }
+    let filter = |nearest: bool| {
+        if nearest {
+            vk::Filter::NEAREST
+        } else {
+            vk::Filter::LINEAR
+        }
+    };
+    let info = vk::SamplerCreateInfo::default()
+        .mag_filter(filter(t.mag_nearest))
+        .min_filter(filter(t.min_nearest))
+        .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+        .address_mode_u(address_mode(t.wrap_s))
+        .address_mode_v(address_mode(t.wrap_t))
+        .address_mode_w(vk::SamplerAddressMode::REPEAT)
+        // Anisotropic filtering makes no sense with nearest filtering (and blends texels on
+        // some drivers).
+        .anisotropy_enable(!t.min_nearest)
+        .max_anisotropy(ctx.properties.limits.max_sampler_anisotropy.min(8.0))
+        .max_lod(vk::LOD_CLAMP_NONE);
+    samplers.push(Sampler::new(ctx, &info)?);
+    keys.insert(key, samplers.len() - 1);
+    Ok(samplers.len() - 1)
+}
+
 fn address_mode(w: Wrap) -> vk::SamplerAddressMode {
     match w {
         Wrap::Repeat => vk::SamplerAddressMode::REPEAT,
@@ -250,22 +342,7 @@ impl GpuScene {
         )?;
 
         // Materials, lights and shadow views are small: host-visible buffers, written once.
-        let mats: Vec<GpuMaterial> = scene
-            .materials
-            .iter()
-            .map(GpuMaterial::from_material)
-            .collect();
-        let mats = if mats.is_empty() {
-            vec![GpuMaterial::default()]
-        } else {
-            mats
-        };
-        let materials = Buffer::with_data(
-            ctx,
-            "materials",
-            as_bytes(&mats),
-            vk::BufferUsageFlags::STORAGE_BUFFER,
-        )?;
+        let materials = material_buffer(ctx, scene)?;
 
         let table = light_table(
             &scene.lights,
@@ -277,17 +354,7 @@ impl GpuScene {
         let light_buffers = LightBuffers::new(ctx, &table)?;
 
         // Textures, then a 1x1 white one bound wherever a material has no texture.
-        let white = Texture {
-            name: "white".into(),
-            width: 1,
-            height: 1,
-            rgba8: vec![255; 4],
-            srgb: false,
-            wrap_s: Wrap::Repeat,
-            wrap_t: Wrap::Repeat,
-            mag_nearest: false,
-            min_nearest: false,
-        };
+        let white = white_texture();
         let tex_list: Vec<&Texture> = scene.textures.iter().chain([&white]).collect();
         let mut textures = Vec::new();
         let mut regions: Vec<Vec<vk::BufferImageCopy>> = Vec::new();
@@ -314,59 +381,11 @@ impl GpuScene {
             )?;
             let mut r = Vec::new();
             for (level, (w, h, data)) in chain.iter().enumerate() {
-                let off = stage(data);
-                r.push(
-                    vk::BufferImageCopy::default()
-                        .buffer_offset(off)
-                        .image_subresource(vk::ImageSubresourceLayers {
-                            aspect_mask: vk::ImageAspectFlags::COLOR,
-                            mip_level: level as u32,
-                            base_array_layer: 0,
-                            layer_count: 1,
-                        })
-                        .image_extent(vk::Extent3D {
-                            width: *w,
-                            height: *h,
-                            depth: 1,
-                        }),
-                );
+                r.push(mip_copy(stage(data), level as u32, *w, *h));
             }
             regions.push(r);
             textures.push(img);
-            let key = (
-                address_mode(t.wrap_s).as_raw(),
-                address_mode(t.wrap_t).as_raw(),
-                t.mag_nearest,
-                t.min_nearest,
-            );
-            let idx = match sampler_keys.get(&key) {
-                Some(&i) => i,
-                None => {
-                    let filter = |nearest: bool| {
-                        if nearest {
-                            vk::Filter::NEAREST
-                        } else {
-                            vk::Filter::LINEAR
-                        }
-                    };
-                    let info = vk::SamplerCreateInfo::default()
-                        .mag_filter(filter(t.mag_nearest))
-                        .min_filter(filter(t.min_nearest))
-                        .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
-                        .address_mode_u(address_mode(t.wrap_s))
-                        .address_mode_v(address_mode(t.wrap_t))
-                        .address_mode_w(vk::SamplerAddressMode::REPEAT)
-                        // Anisotropic filtering makes no sense with nearest filtering (and
-                        // blends texels on some drivers).
-                        .anisotropy_enable(!t.min_nearest)
-                        .max_anisotropy(ctx.properties.limits.max_sampler_anisotropy.min(8.0))
-                        .max_lod(vk::LOD_CLAMP_NONE);
-                    samplers.push(Sampler::new(ctx, &info)?);
-                    sampler_keys.insert(key, samplers.len() - 1);
-                    samplers.len() - 1
-                }
-            };
-            texture_samplers.push(idx);
+            texture_samplers.push(sampler_for(ctx, t, &mut sampler_keys, &mut samplers)?);
         }
 
         let mut staging = Buffer::new(
