@@ -1,11 +1,14 @@
 #version 450
-// variants: PAPER
+// variants: PAPER UPSAMPLED
 // Cone tracing per pixel, step 4 of the paper (its light_pass): indirect diffuse from a set of
 // cones over the normal's hemisphere, a specular cone along the reflection whose aperture
 // follows roughness, and ambient occlusion; added to the direct light already in `radiance_out`.
 // Default: glTF BRDF weights (diffuse albedo / pi, split-sum specular). PAPER: 6 cones of 60
 // degrees tilted ~41 degrees, weights pi/4 and 3pi/20, indirect x 2 (bounceStrength) and
 // (direct + indirect) x AO + emission, as the original composes it (without its gamma mix-up).
+// UPSAMPLED: the diffuse cones were traced at reduced resolution (diffuse_gather.comp); each
+// pixel takes them from the blocks around it that hold its own surface (a joint bilateral
+// upsampling guided by position and normal), and traces them itself where none does.
 #include "common.glsl"
 #include "voxel_common.glsl"
 #define CONE_SET 2
@@ -23,9 +26,51 @@ layout(set = 1, binding = 3) uniform sampler2D gb_emission;
 layout(set = 1, binding = 4) uniform sampler2D gb_specular;
 layout(set = 1, binding = 5, rgba32f) uniform image2D radiance_out;
 
+#ifdef UPSAMPLED
+// Per block of scale x scale pixels: irradiance, occlusion (diffuse_gather.comp).
+layout(set = 1, binding = 6) uniform sampler2D gathered;
+#endif
+
 layout(push_constant) uniform Pass {
     uint mode;   // 0 full, 1 indirect only, 2 ambient occlusion
+    uint scale;  // UPSAMPLED: pixels per block side
 } pass;
+
+#ifdef UPSAMPLED
+// The diffuse cones of the pixel at p (normal n) from the four blocks around it, each weighted
+// bilinearly by where its traced pixel (the one nearest the block's centre) lies, and only if
+// that pixel shows the same surface: its position within a quarter voxel of p's tangent plane
+// and two voxels of p, its normal within 25 degrees. weight 0: no block does.
+Gather upsample(ivec2 px, vec3 p, vec3 n) {
+    int s = int(pass.scale);
+    ivec2 blocks = textureSize(gathered, 0);
+    ivec2 size = ivec2(frame.counts.yz);
+    vec2 u = (vec2(px) - float(s / 2)) / float(s);
+    ivec2 b = ivec2(floor(u));
+    vec2 f = u - vec2(b);
+    float vs = voxel_size();
+    vec4 sum = vec4(0.0);
+    float wsum = 0.0;
+    for (int k = 0; k < 4; k++) {
+        ivec2 o = ivec2(k & 1, k >> 1);
+        ivec2 c = b + o;
+        if (any(lessThan(c, ivec2(0))) || any(greaterThanEqual(c, blocks))) continue;
+        ivec2 traced = min(c * s + s / 2, size - 1);
+        vec4 pk = texelFetch(gb_position, traced, 0);
+        if (pk.a == 0.0) continue;
+        vec3 nk = oct_decode(texelFetch(gb_normals, traced, 0).xy);
+        vec3 d = pk.xyz - p;
+        if (abs(dot(d, n)) > 0.25 * vs || dot(d, d) > 64.0 * vs * vs || dot(n, nk) < 0.9) continue;
+        // A floor under the bilinear weight keeps a block that holds the surface when the
+        // nearer ones do not.
+        vec2 wb = mix(1.0 - f, f, vec2(o));
+        float w = (wb.x + 1e-3) * (wb.y + 1e-3);
+        sum += w * texelFetch(gathered, c, 0);
+        wsum += w;
+    }
+    return wsum > 0.0 ? Gather(sum.rgb / wsum, sum.a / wsum, PI) : Gather(vec3(0.0), 0.0, 0.0);
+}
+#endif
 
 // Karis' analytic fit of the split-sum environment BRDF: scale and bias of f0.
 vec2 env_brdf(float roughness, float n_dot_v) {
@@ -53,26 +98,19 @@ void main() {
     vec3 n = oct_decode(normals.xy);
     vec3 geo = oct_decode(normals.zw);
     vec3 v = normalize(frame.eye.xyz - p);
-    float vs = voxel_size();
     float max_dist = frame.cone.z * frame.grid.w;
     mat3 frame_n = tangent_frame(n);
+    float t0;
+    vec3 origin = cone_start(p, n, geo, t0);
 
-    vec3 irradiance = vec3(0.0);
-    float occlusion = 0.0;
-#ifdef PAPER
-    vec3 origin = p + n * 2.0 * vs;
-    float t0 = 2.0 * vs;
+#ifdef UPSAMPLED
+    Gather g = upsample(px, p, n);
+    if (g.weight == 0.0) g = diffuse_cones(origin, frame_n, t0, 0u, 1u);
 #else
-    vec3 origin = p + geo * frame.trace.x * vs;
-    float t0 = vs;
+    Gather g = diffuse_cones(origin, frame_n, t0, 0u, 1u);
 #endif
-    for (uint i = 0u; i < frame.grid_info.z; i++) {
-        vec3 d = normalize(frame_n * frame.cones[i].xyz);
-        Cone c = trace_cone(origin, d, frame.cone.x, t0, max_dist);
-        irradiance += frame.cones[i].w * c.radiance;
-        occlusion += frame.cones[i].w * c.occlusion;
-    }
-    float ao = clamp(1.0 - occlusion / PI, 0.0, 1.0);
+    vec3 irradiance = g.irradiance;
+    float ao = clamp(1.0 - g.occlusion / PI, 0.0, 1.0);
 
     vec3 base = albedo.rgb;
     float metallic = albedo.a;

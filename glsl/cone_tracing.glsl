@@ -208,4 +208,46 @@ mat3 tangent_frame(vec3 n) {
     return mat3(t, cross(n, t), n);
 }
 
+// Where a pixel's cones start: off the surface at p (shading normal n, geometric normal geo),
+// and the first sample's distance from there.
+vec3 cone_start(vec3 p, vec3 n, vec3 geo, out float t0) {
+    float vs = voxel_size();
+#ifdef PAPER
+    t0 = 2.0 * vs;
+    return p + n * 2.0 * vs;
+#else
+    t0 = vs;
+    return p + geo * frame.trace.x * vs;
+#endif
+}
+
+// What some of a pixel's diffuse cones gather: the cosine-weighted radiance (the irradiance,
+// once every cone is in), the occlusion, and the cones' weight (pi for the whole set).
+struct Gather {
+    vec3 irradiance;
+    float occlusion;
+    float weight;
+};
+
+// The diffuse cones first, first + stride, ... of the set, around the normal frame `frame_n`.
+Gather diffuse_cones(vec3 origin, mat3 frame_n, float t0, uint first, uint stride) {
+    Gather g = Gather(vec3(0.0), 0.0, 0.0);
+    float max_dist = frame.cone.z * frame.grid.w;
+    for (uint i = first; i < frame.grid_info.z; i += stride) {
+        vec3 d = normalize(frame_n * frame.cones[i].xyz);
+        Cone c = trace_cone(origin, d, frame.cone.x, t0, max_dist);
+        g.irradiance += frame.cones[i].w * c.radiance;
+        g.occlusion += frame.cones[i].w * c.occlusion;
+        g.weight += frame.cones[i].w;
+    }
+    return g;
+}
+
+// The whole set's weight.
+float cone_set_weight() {
+    float w = 0.0;
+    for (uint i = 0u; i < frame.grid_info.z; i++) w += frame.cones[i].w;
+    return w;
+}
+
 #endif

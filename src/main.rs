@@ -111,6 +111,22 @@ struct GiOpts {
     /// most powerful, are area lights: exact per pixel, with soft shadows)
     #[arg(long, alias = "no-emitter-lights")]
     no_area_lights: bool,
+    /// Trace the diffuse cones once per block of S x S pixels (1, 2 or 4) and upsample them by
+    /// position and normal (default 1; not with --paper)
+    #[arg(long, value_name = "S", value_parser = trace_scale, conflicts_with = "paper")]
+    trace_scale: Option<u32>,
+    /// Trace the diffuse cones over N frames, a share per frame, from a reprojected history
+    /// (0: all of them every frame; default 0; not with --paper)
+    #[arg(long, value_name = "N", conflicts_with = "paper",
+          value_parser = clap::value_parser!(u32).range(0..=16))]
+    temporal: Option<u32>,
+}
+
+fn trace_scale(s: &str) -> Result<u32, String> {
+    match s.parse::<u32>() {
+        Ok(v @ (1 | 2 | 4)) => Ok(v),
+        _ => Err("must be 1, 2 or 4".into()),
+    }
 }
 
 fn aperture(s: &str) -> Result<f32, String> {
@@ -348,7 +364,8 @@ struct BenchCmd {
     /// AXIS := NAME=V1,V2,..: the cartesian product of the axes over the defaults. Presets:
     /// default (one axis at a time around the defaults), tiny (32^3: default and paper). Axes:
     /// voxels, bounces, paper, cones, aperture, step, max-distance, start-offset, ao-falloff,
-    /// voxel-shadows, cone-shadows, lod-offset, tail, emitter-lights
+    /// voxel-shadows, cone-shadows, lod-offset, tail, area-lights, trace-scale,
+    /// temporal
     #[arg(long, default_value = "default")]
     sweep: String,
     /// Where the results go
@@ -452,6 +469,8 @@ impl GiOpts {
         gi.cone_shadows = self.cone_shadows;
         gi.tail &= !self.no_tail;
         gi.area_lights &= !self.no_area_lights;
+        gi.trace_scale = self.trace_scale.unwrap_or(gi.trace_scale);
+        gi.temporal = self.temporal.unwrap_or(gi.temporal);
         gi
     }
 }

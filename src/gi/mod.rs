@@ -23,7 +23,7 @@ use std::sync::Arc;
 pub use bounce::Bounce;
 pub use inject::Inject;
 pub use mip::Mip;
-pub use trace::{FrameImages, Trace, TraceMode, GBUFFER_NAMES};
+pub use trace::{FrameImages, Trace, TraceFrame, TraceLayout, TraceMode, GBUFFER_NAMES};
 pub use voxelize::{Voxelizer, EMITTER_LIGHT};
 
 /// The most light bounces `GiSettings::bounces` may ask for.
@@ -64,6 +64,13 @@ pub struct GiSettings {
     /// Emissive surfaces light the scene as area lights, integrated per pixel, with soft
     /// shadows (src/render/area_lights.rs), instead of as voxel emission. Not for `paper`.
     pub area_lights: bool,
+    /// Pixels per side of the blocks that trace the diffuse cones once (1, 2 or 4), their
+    /// result upsampled by position and normal (glsl/diffuse_gather.comp). Not for `paper`.
+    pub trace_scale: u32,
+    /// Frames over which the diffuse cones are traced (0: all in every frame): each frame
+    /// traces every N-th cone and adds it to a history reprojected from the frame before.
+    /// Not for `paper`.
+    pub temporal: u32,
 }
 
 impl Default for GiSettings {
@@ -99,6 +106,8 @@ impl Default for GiSettings {
             // blotches); a voxel's one radiance spreads a small emitter's light over what its
             // coarse texels reach (docs/hard-cases.md, emissive-1e4, emitters).
             area_lights: true,
+            trace_scale: 1,
+            temporal: 0,
         }
     }
 }
@@ -118,6 +127,8 @@ impl GiSettings {
             start_offset: 2.0,
             tail: false,
             area_lights: false,
+            trace_scale: 1,
+            temporal: 0,
             ..Default::default()
         }
     }
@@ -286,6 +297,22 @@ pub const FIELDS: &[Field] = &[
         max: 1.0,
         get: |g| Value::Switch(g.area_lights),
         set: |g, v| g.area_lights = v != 0.0,
+    },
+    Field {
+        axis: "trace-scale",
+        column: "trace_scale",
+        min: 1.0,
+        max: 4.0,
+        get: |g| Value::Count(g.trace_scale),
+        set: |g, v| g.trace_scale = v as u32,
+    },
+    Field {
+        axis: "temporal",
+        column: "temporal",
+        min: 0.0,
+        max: 16.0,
+        get: |g| Value::Count(g.temporal),
+        set: |g, v| g.temporal = v as u32,
     },
 ];
 
@@ -558,7 +585,11 @@ impl Gi {
         } else {
             None
         };
-        let trace = Trace::new(ctx, scene_set, &volumes, &inputs.frame, paper)?;
+        let layout = TraceLayout {
+            scale: settings.trace_scale.max(1),
+            temporal: settings.temporal,
+        };
+        let trace = Trace::new(ctx, scene_set, &volumes, &inputs.frame, paper, layout)?;
         Ok(Gi {
             cones: cone_set(settings.cone_count, settings.cone_aperture_deg, paper),
             settings: settings.clone(),
@@ -864,8 +895,10 @@ mod tests {
             lod_offset: _,
             tail: _,
             area_lights: _,
+            trace_scale: _,
+            temporal: _,
         } = GiSettings::default();
-        assert_eq!(FIELDS.len(), 14, "a setting without its line in FIELDS");
+        assert_eq!(FIELDS.len(), 16, "a setting without its line in FIELDS");
         for f in FIELDS {
             let d = GiSettings::default();
             let mut g = d.clone();

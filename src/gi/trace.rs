@@ -4,7 +4,11 @@
 use super::bounce::cone_volumes;
 use super::inject::{read_voxel_data, variant};
 use super::volumes::Volumes;
-use crate::vk::{vk, Bindings, Context, Graph, Image, Pass, SharedSet, Usage, VkResult};
+use crate::vk::{
+    vk, Bindings, Context, Graph, Image, ImageDesc, Pass, ResourceStates, SharedSet, Usage,
+    VkResult,
+};
+use glam::Mat4;
 use std::sync::Arc;
 
 /// What the trace pass writes.
@@ -35,13 +39,42 @@ pub const GBUFFER_NAMES: [&str; 5] = [
 /// What the trace reads of the frame: the G-buffer (each image with its sampler), and the
 /// radiance it adds to.
 pub struct FrameImages<'a> {
+    /// Width and height in pixels.
+    pub size: (u32, u32),
     pub gbuffer: &'a [Image],
     pub sampler: vk::Sampler,
     pub out: &'a Image,
 }
 
+/// Where the diffuse cones are traced: `scale` (1, 2 or 4) pixels per side of each block that
+/// traces them once (1: every pixel), and with `temporal` N > 0, a subset of them per frame,
+/// completed over N frames from a reprojected history (glsl/diffuse_gather.comp).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TraceLayout {
+    pub scale: u32,
+    pub temporal: u32,
+}
+
+impl TraceLayout {
+    /// Every pixel traces every cone, every frame (one pass, as the paper).
+    pub fn direct(self) -> bool {
+        self.scale <= 1 && self.temporal == 0
+    }
+}
+
+/// What a frame tells the reduced-resolution trace about time.
+#[derive(Clone, Copy, Debug)]
+pub struct TraceFrame {
+    /// The camera of the frame before (the history's).
+    pub prev_view_proj: Mat4,
+    /// Frames since the renderer began: picks the subset of cones to trace.
+    pub index: u64,
+    /// Drop the history (the light in the voxels changed, the images are new, or a cut).
+    pub reset: bool,
+}
+
 /// The trace's table: the frame's images and the volumes cones sample.
-fn trace_table(volumes: &Volumes, frame: &FrameImages) -> Bindings {
+fn trace_table(volumes: &Volumes, frame: &FrameImages, gathered: Option<&Image>) -> Bindings {
     let table = frame
         .gbuffer
         .iter()
@@ -49,9 +82,137 @@ fn trace_table(volumes: &Volumes, frame: &FrameImages) -> Bindings {
         .fold(Bindings::new(), |t, (img, name)| {
             t.sampled_with(name, img, frame.sampler)
         })
-        .image("radiance_out", frame.out, Usage::ReadWrite);
+        .image("radiance_out", frame.out, Usage::ReadWrite)
+        .with(gathered, |t, g| {
+            t.sampled_with("gathered", g, frame.sampler)
+        });
     cone_volumes(table, volumes, true)
 }
+
+/// The history of the temporal gather: its sums, their places and normals (one frame's).
+struct History {
+    sums: Image,
+    place: Image,
+    normal: Image,
+}
+
+impl History {
+    fn new(ctx: &Arc<Context>, w: u32, h: u32, k: usize) -> VkResult<History> {
+        let usage = vk::ImageUsageFlags::STORAGE;
+        let image = |name: &str, format| {
+            Image::new(
+                ctx,
+                &format!("trace history {name} {k}"),
+                ImageDesc::d2(format, w, h, usage),
+            )
+        };
+        Ok(History {
+            sums: image("sums", vk::Format::R32G32B32A32_SFLOAT)?,
+            place: image("place", vk::Format::R32G32B32A32_SFLOAT)?,
+            normal: image("normal", vk::Format::R16G16B16A16_SFLOAT)?,
+        })
+    }
+}
+
+/// The diffuse cones at reduced resolution or over frames: the per-block results and, when
+/// temporal, two histories that frames read and write in turn.
+struct Gather {
+    pass: Pass,
+    gathered: Image,
+    histories: Vec<History>,
+}
+
+impl Gather {
+    fn images(
+        ctx: &Arc<Context>,
+        frame: &FrameImages,
+        layout: TraceLayout,
+    ) -> VkResult<(Image, Vec<History>)> {
+        let (w, h) = frame.size;
+        let (bw, bh) = (w.div_ceil(layout.scale), h.div_ceil(layout.scale));
+        let gathered = Image::new(
+            ctx,
+            "trace gathered",
+            ImageDesc::d2(
+                vk::Format::R32G32B32A32_SFLOAT,
+                bw,
+                bh,
+                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED,
+            ),
+        )?;
+        let histories = if layout.temporal > 0 {
+            (0..2)
+                .map(|k| History::new(ctx, bw, bh, k))
+                .collect::<VkResult<Vec<_>>>()?
+        } else {
+            Vec::new()
+        };
+        Ok((gathered, histories))
+    }
+
+    /// Instance k reads history k and writes the other one.
+    fn tables(
+        volumes: &Volumes,
+        frame: &FrameImages,
+        gathered: &Image,
+        histories: &[History],
+    ) -> Vec<Bindings> {
+        let base = || {
+            let t = Bindings::new()
+                .sampled_with("gb_position", &frame.gbuffer[0], frame.sampler)
+                .sampled_with("gb_normals", &frame.gbuffer[1], frame.sampler)
+                .image("gathered", gathered, Usage::Write);
+            cone_volumes(t, volumes, true)
+        };
+        if histories.is_empty() {
+            return vec![base()];
+        }
+        (0..2)
+            .map(|k| {
+                let (a, b) = (&histories[k], &histories[1 - k]);
+                base()
+                    .image("history_in", &a.sums, Usage::Read)
+                    .image("history_place_in", &a.place, Usage::Read)
+                    .image("history_normal_in", &a.normal, Usage::Read)
+                    .image("history_out", &b.sums, Usage::Write)
+                    .image("history_place_out", &b.place, Usage::Write)
+                    .image("history_normal_out", &b.normal, Usage::Write)
+            })
+            .collect()
+    }
+
+    fn new(
+        ctx: &Arc<Context>,
+        scene: &SharedSet,
+        volumes: &Volumes,
+        frame: &FrameImages,
+        layout: TraceLayout,
+    ) -> VkResult<Gather> {
+        let (gathered, histories) = Gather::images(ctx, frame, layout)?;
+        let shader = if layout.temporal > 0 {
+            "diffuse_gather.comp:TEMPORAL"
+        } else {
+            "diffuse_gather.comp"
+        };
+        let pass = Pass::new(
+            ctx,
+            crate::vk::Program::Compute(shader),
+            &[scene],
+            Gather::tables(volumes, frame, &gathered, &histories),
+            GATHER_PUSH_SIZE,
+        )?;
+        Ok(Gather {
+            pass,
+            gathered,
+            histories,
+        })
+    }
+}
+
+/// mat4 prev_view_proj, uint scale, subsets, frame index, reset.
+const GATHER_PUSH_SIZE: u32 = 64 + 16;
+/// uint mode, scale.
+const TRACE_PUSH_SIZE: u32 = 8;
 
 /// The voxel views' table: the voxels, the volumes and the image they write.
 fn view_table(volumes: &Volumes, out: &Image) -> Bindings {
@@ -60,8 +221,10 @@ fn view_table(volumes: &Volumes, out: &Image) -> Bindings {
 }
 
 pub struct Trace {
+    pub layout: TraceLayout,
     trace: Pass,
     view: Pass,
+    gather: Option<Gather>,
 }
 
 impl Trace {
@@ -71,13 +234,22 @@ impl Trace {
         volumes: &Volumes,
         frame: &FrameImages,
         paper: bool,
+        layout: TraceLayout,
     ) -> VkResult<Trace> {
+        let gather = match layout.direct() || paper {
+            true => None,
+            false => Some(Gather::new(ctx, scene, volumes, frame, layout)?),
+        };
+        let shader = match &gather {
+            Some(_) => "cone_trace.comp:UPSAMPLED".to_string(),
+            None => variant("cone_trace.comp", paper),
+        };
         let trace = Pass::compute(
             ctx,
-            &variant("cone_trace.comp", paper),
+            &shader,
             &[scene],
-            trace_table(volumes, frame),
-            4,
+            trace_table(volumes, frame, gather.as_ref().map(|g| &g.gathered)),
+            TRACE_PUSH_SIZE,
         )?;
         let view = Pass::compute(
             ctx,
@@ -86,25 +258,50 @@ impl Trace {
             view_table(volumes, frame.out),
             4,
         )?;
-        Ok(Trace { trace, view })
+        Ok(Trace {
+            layout,
+            trace,
+            view,
+            gather,
+        })
     }
 
     /// Points the passes at new G-buffer and output images (a resized frame). The sets must
     /// not be in use (the frames before have been waited for).
     pub fn retarget(
         &mut self,
-        ctx: &Context,
+        ctx: &Arc<Context>,
         scene: &SharedSet,
         volumes: &Volumes,
         frame: &FrameImages,
+        states: &mut ResourceStates,
     ) -> VkResult<()> {
+        if let Some(g) = self.gather.as_mut() {
+            let old = g
+                .histories
+                .iter()
+                .flat_map(|h| [&h.sums, &h.place, &h.normal]);
+            for img in old.chain([&g.gathered]) {
+                states.forget(img.raw);
+            }
+            let (gathered, histories) = Gather::images(ctx, frame, self.layout)?;
+            let tables = Gather::tables(volumes, frame, &gathered, &histories);
+            for (k, t) in tables.into_iter().enumerate() {
+                g.pass.rebind(ctx, k, t, &[scene])?;
+            }
+            g.gathered = gathered;
+            g.histories = histories;
+        }
+        let gathered = self.gather.as_ref().map(|g| &g.gathered);
         self.trace
-            .rebind(ctx, 0, trace_table(volumes, frame), &[scene])?;
+            .rebind(ctx, 0, trace_table(volumes, frame, gathered), &[scene])?;
         self.view
             .rebind(ctx, 0, view_table(volumes, frame.out), &[scene])
     }
 
-    /// Cones per pixel (`mode` below 10), or a view of the voxels.
+    /// Cones per pixel (`mode` below 10), or a view of the voxels. `time` says which frame
+    /// this is to the reduced-resolution and temporal trace.
+    #[allow(clippy::too_many_arguments)]
     pub fn record(
         &self,
         ctx: &Context,
@@ -112,19 +309,66 @@ impl Trace {
         scene_set: vk::DescriptorSet,
         size: (u32, u32),
         mode: TraceMode,
+        time: &TraceFrame,
         name: &str,
     ) {
         let d = &ctx.device;
         let debug = (mode as u32) >= 10;
+        if let (Some(gather), false) = (&self.gather, debug) {
+            self.record_gather(ctx, g, gather, scene_set, time, name);
+        }
         let (p, push) = if debug {
-            (&self.view, mode as u32 - 10)
+            (&self.view, vec![mode as u32 - 10])
         } else {
-            (&self.trace, mode as u32)
+            (&self.trace, vec![mode as u32, self.layout.scale.max(1)])
         };
+        let bytes: Vec<u8> = push.iter().flat_map(|v| v.to_le_bytes()).collect();
         p.declare(g.pass(name), 0).record(|cmd| unsafe {
             p.bind(d, cmd, &[(0, scene_set)], 0);
-            p.pipeline.push(d, cmd, &push.to_le_bytes());
+            p.pipeline.push(d, cmd, &bytes);
             d.cmd_dispatch(cmd, size.0.div_ceil(8), size.1.div_ceil(8), 1);
         });
+    }
+
+    /// The diffuse cones per block (and over frames), before the trace upsamples them.
+    fn record_gather(
+        &self,
+        ctx: &Context,
+        g: &mut Graph,
+        gather: &Gather,
+        scene_set: vk::DescriptorSet,
+        time: &TraceFrame,
+        name: &str,
+    ) {
+        let d = &ctx.device;
+        let instance = if gather.histories.is_empty() {
+            0
+        } else {
+            (time.index % 2) as usize
+        };
+        let mut push: Vec<u8> = time
+            .prev_view_proj
+            .to_cols_array()
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let subsets = self.layout.temporal;
+        for v in [
+            self.layout.scale.max(1),
+            subsets,
+            (time.index % subsets.max(1) as u64) as u32,
+            time.reset as u32,
+        ] {
+            push.extend(v.to_le_bytes());
+        }
+        let e = gather.gathered.desc.extent;
+        let blocks = (e.width, e.height);
+        let p = &gather.pass;
+        p.declare(g.pass(&format!("{name} gather")), instance)
+            .record(|cmd| unsafe {
+                p.bind(d, cmd, &[(0, scene_set)], instance);
+                p.pipeline.push(d, cmd, &push);
+                d.cmd_dispatch(cmd, blocks.0.div_ceil(8), blocks.1.div_ceil(8), 1);
+            });
     }
 }

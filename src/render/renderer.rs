@@ -11,7 +11,7 @@ use super::instances::{self, Instances, SceneDraw, DRAW_PUSH_SIZE, NORMAL, POSIT
 use super::lighting::LightingPass;
 use super::scene_set::SceneBindings;
 use super::shadow_maps::ShadowMaps;
-use crate::gi::{Dirty, FrameImages, Gi, GiInputs, GiSettings, StepInputs, TraceMode};
+use crate::gi::{Dirty, FrameImages, Gi, GiInputs, GiSettings, StepInputs, TraceFrame, TraceMode};
 use crate::scene::{Aabb, Camera, Light, Scene};
 use crate::vk::{
     vk, CommandPool, Context, Graph, Image, PassTimer, Pipeline, ResourceStates, Sampler, VkError,
@@ -198,6 +198,11 @@ pub struct Renderer {
     /// The scene's bounds (light views are fitted to them).
     bounds: Aabb,
     specular_needed: bool,
+    /// Frames rendered, and the camera of the last one (the temporal trace's history).
+    frame_index: u64,
+    prev_view_proj: Mat4,
+    /// The next frame drops the temporal trace's history.
+    history_reset: bool,
     ctx: Arc<Context>,
 }
 
@@ -240,6 +245,7 @@ impl Renderer {
                 materials: &sets.materials,
                 shadow_map: shadow,
                 frame: FrameImages {
+                    size: (settings.width, settings.height),
                     gbuffer: &targets.gbuffer,
                     sampler: nearest.raw,
                     out: &targets.hdr,
@@ -292,21 +298,29 @@ impl Renderer {
                 .materials
                 .iter()
                 .any(|m| m.metallic > 0.0 || m.specular_factor > 0.0),
+            frame_index: 0,
+            prev_view_proj: Mat4::IDENTITY,
+            history_reset: true,
             settings,
             ctx: ctx.clone(),
         })
     }
 
     /// The frame's uniforms: the camera, the lights' count, the shadow and voxel settings.
-    fn uniforms(&self) -> FrameUniforms {
+    fn view_proj(&self) -> (Mat4, Mat4) {
         let (w, h) = (self.settings.width, self.settings.height);
-        let view = self.camera.view();
         let proj = Mat4::perspective_rh(
             self.camera.yfov,
             w as f32 / h as f32,
             self.camera.znear,
             self.camera.zfar,
         );
+        (self.camera.view(), proj)
+    }
+
+    fn uniforms(&self) -> FrameUniforms {
+        let (w, h) = (self.settings.width, self.settings.height);
+        let (view, proj) = self.view_proj();
         let mut u = FrameUniforms {
             view_proj: proj * view,
             view,
@@ -374,6 +388,10 @@ impl Renderer {
     ) -> VkResult<()> {
         let uniforms = self.uniforms();
         self.sets.write_uniforms(&uniforms);
+        // The light in the voxels changes this frame: the temporal history is stale.
+        if self.gi.as_ref().is_some_and(|gi| gi.dirty != Dirty::NONE) {
+            self.history_reset = true;
+        }
         let ctx = self.ctx.clone();
         let cmd = self.commands.begin()?;
         let mut states = std::mem::take(&mut self.states);
@@ -398,6 +416,9 @@ impl Renderer {
         self.timer = timer;
         submitted?;
         self.shadows.dirty.fill(false);
+        self.frame_index += 1;
+        self.prev_view_proj = uniforms.view_proj;
+        self.history_reset = false;
         // The voxels now hold the geometry and its light until a node or a light moves.
         if let Some(gi) = self.gi.as_mut() {
             gi.mark_clean();
@@ -532,8 +553,27 @@ impl Renderer {
             Mode::Direct => unreachable!("direct mode has no voxel passes"),
         };
         let size = (self.targets.width, self.targets.height);
-        gi.trace
-            .record(&self.ctx, g, self.sets.scene_set(), size, trace_mode, name);
+        let time = TraceFrame {
+            prev_view_proj: self.prev_view_proj,
+            index: self.frame_index,
+            reset: self.history_reset,
+        };
+        gi.trace.record(
+            &self.ctx,
+            g,
+            self.sets.scene_set(),
+            size,
+            trace_mode,
+            &time,
+            name,
+        );
+    }
+
+    /// The next frame traces the diffuse cones afresh, without the temporal history: a camera
+    /// cut (a new view that shares surfaces with the old one would otherwise reuse their
+    /// light, which is right but not what a first frame shows).
+    pub fn discard_history(&mut self) {
+        self.history_reset = true;
     }
 
     /// Moves every instance of a glTF node: the next frame voxelizes again the geometry of
@@ -607,13 +647,20 @@ impl Renderer {
             .retarget(&self.ctx, &self.sets, &targets, &self.nearest, shadow)?;
         if let Some(gi) = &mut self.gi {
             let frame = FrameImages {
+                size: (width, height),
                 gbuffer: &targets.gbuffer,
                 sampler: self.nearest.raw,
                 out: &targets.hdr,
             };
-            gi.trace
-                .retarget(&self.ctx, &self.sets.scene, &gi.volumes, &frame)?;
+            gi.trace.retarget(
+                &self.ctx,
+                &self.sets.scene,
+                &gi.volumes,
+                &frame,
+                &mut self.states,
+            )?;
         }
+        self.discard_history();
         self.targets.forget(&mut self.states);
         self.targets = targets;
         self.settings.width = width;
