@@ -27,8 +27,10 @@ layout(set = 1, binding = 4) uniform sampler2D gb_specular;
 layout(set = 1, binding = 5, rgba32f) uniform image2D radiance_out;
 
 #ifdef UPSAMPLED
-// Per block of scale x scale pixels: irradiance, occlusion (diffuse_gather.comp).
+// Per block of scale x scale pixels (diffuse_gather.comp): irradiance and occlusion; the
+// specular cone's radiance where it is wide (a 1) or none (a 0).
 layout(set = 1, binding = 6) uniform sampler2D gathered;
+layout(set = 1, binding = 7) uniform sampler2D gathered_specular;
 #endif
 
 layout(push_constant) uniform Pass {
@@ -37,11 +39,17 @@ layout(push_constant) uniform Pass {
 } pass;
 
 #ifdef UPSAMPLED
-// The diffuse cones of the pixel at p (normal n) from the four blocks around it, each weighted
+struct Upsampled {
+    Gather diffuse;  // weight 0: no block holds the pixel's surface
+    vec4 specular;   // a 0: no block traced a wide specular cone on it
+};
+
+// The cones of the pixel at p (normal n) from the four blocks around it, each weighted
 // bilinearly by where its traced pixel (the one nearest the block's centre) lies, and only if
 // that pixel shows the same surface: its position within a quarter voxel of p's tangent plane
-// and two voxels of p, its normal within 25 degrees. weight 0: no block does.
-Gather upsample(ivec2 px, vec3 p, vec3 n) {
+// and eight voxels of p, its normal within 25 degrees (within 11 for the specular cone, whose
+// direction turns twice as fast).
+Upsampled upsample(ivec2 px, vec3 p, vec3 n) {
     int s = int(pass.scale);
     ivec2 blocks = textureSize(gathered, 0);
     ivec2 size = ivec2(frame.counts.yz);
@@ -50,6 +58,7 @@ Gather upsample(ivec2 px, vec3 p, vec3 n) {
     vec2 f = u - vec2(b);
     float vs = voxel_size();
     vec4 sum = vec4(0.0);
+    vec4 spec = vec4(0.0);
     float wsum = 0.0;
     for (int k = 0; k < 4; k++) {
         ivec2 o = ivec2(k & 1, k >> 1);
@@ -60,15 +69,21 @@ Gather upsample(ivec2 px, vec3 p, vec3 n) {
         if (pk.a == 0.0) continue;
         vec3 nk = oct_decode(texelFetch(gb_normals, traced, 0).xy);
         vec3 d = pk.xyz - p;
-        if (abs(dot(d, n)) > 0.25 * vs || dot(d, d) > 64.0 * vs * vs || dot(n, nk) < 0.9) continue;
+        float facing = dot(n, nk);
+        if (abs(dot(d, n)) > 0.25 * vs || dot(d, d) > 64.0 * vs * vs || facing < 0.9) continue;
         // A floor under the bilinear weight keeps a block that holds the surface when the
         // nearer ones do not.
         vec2 wb = mix(1.0 - f, f, vec2(o));
         float w = (wb.x + 1e-3) * (wb.y + 1e-3);
         sum += w * texelFetch(gathered, c, 0);
         wsum += w;
+        vec4 sk = texelFetch(gathered_specular, c, 0);
+        if (sk.a > 0.0 && facing > 0.98) spec += w * vec4(sk.rgb, 1.0);
     }
-    return wsum > 0.0 ? Gather(sum.rgb / wsum, sum.a / wsum, PI) : Gather(vec3(0.0), 0.0, 0.0);
+    Upsampled r;
+    r.diffuse = wsum > 0.0 ? Gather(sum.rgb / wsum, sum.a / wsum, PI) : Gather(vec3(0.0), 0.0, 0.0);
+    r.specular = spec.a > 0.0 ? vec4(spec.rgb / spec.a, 1.0) : vec4(0.0);
+    return r;
 }
 #endif
 
@@ -104,7 +119,8 @@ void main() {
     vec3 origin = cone_start(p, n, geo, t0);
 
 #ifdef UPSAMPLED
-    Gather g = upsample(px, p, n);
+    Upsampled up = upsample(px, p, n);
+    Gather g = up.diffuse;
     if (g.weight == 0.0) g = diffuse_cones(origin, frame_n, t0, 0u, 1u);
 #else
     Gather g = diffuse_cones(origin, frame_n, t0, 0u, 1u);
@@ -122,16 +138,13 @@ void main() {
     vec2 ab = env_brdf(roughness, n_dot_v);
     vec3 spec_reflectance = f0 * ab.x + f90 * ab.y;
     if (frame.trace.z > 0.0 && max(spec_reflectance.r, max(spec_reflectance.g, spec_reflectance.b)) > 1e-4) {
-        vec3 r = reflect(-v, n);
-        float alpha = roughness * roughness;
-#ifdef PAPER
-        float tan_half = clamp(tan(0.5 * PI * roughness), 0.0174533, PI);
-#else
-        // The GGX lobe's half width at half maximum, doubled by reflection.
-        float tan_half = clamp(1.29 * alpha, 0.02, 1.0);
+        float tan_half = specular_aperture(roughness);
+        vec4 seen = vec4(0.0);
+#ifdef UPSAMPLED
+        if (tan_half >= WIDE_SPECULAR) seen = up.specular;
 #endif
-        Cone c = trace_cone(origin, r, tan_half, t0, max_dist);
-        specular = c.radiance * spec_reflectance;
+        if (seen.a == 0.0) seen.rgb = trace_cone(origin, reflect(-v, n), tan_half, t0, max_dist).radiance;
+        specular = seen.rgb * spec_reflectance;
     }
 
     if ((frame.grid_info.w & FLAG_CONE_SHADOWS) != 0u) {

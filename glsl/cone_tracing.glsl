@@ -243,6 +243,20 @@ Gather diffuse_cones(vec3 origin, mat3 frame_n, float t0, uint first, uint strid
     return g;
 }
 
+// The specular cone's tangent of half aperture for a surface's roughness.
+float specular_aperture(float roughness) {
+#ifdef PAPER
+    return clamp(tan(0.5 * PI * roughness), 0.0174533, PI);
+#else
+    // The GGX lobe's half width at half maximum, doubled by reflection.
+    return clamp(1.29 * roughness * roughness, 0.02, 1.0);
+#endif
+}
+
+// A specular cone at least this wide (tangent of its half angle; 53 degrees across) sees a
+// smooth blur of the scene, which the reduced-resolution trace can trace per block too.
+const float WIDE_SPECULAR = 0.5;
+
 // The whole set's weight.
 float cone_set_weight() {
     float w = 0.0;

@@ -3,7 +3,8 @@
 // The diffuse cones of step 4 at reduced resolution: indirect light is smooth on a surface, so
 // one pixel per block of scale x scale (the one nearest the block's centre) traces them, and
 // cone_trace.comp (UPSAMPLED) spreads each block's result over the pixels that show the same
-// surface. Writes per block: irradiance (rgb) and occlusion (a), each over the whole cone set.
+// surface. Writes per block: irradiance (rgb) and occlusion (a), each over the whole cone set;
+// and the specular cone's radiance where it is wide enough to be smooth (rough surfaces).
 // TEMPORAL: each frame traces one of `subsets` interleaved subsets of the cone set (cones
 // k, k + subsets, ...; k = frame mod subsets) and adds it to the block's history, taken from
 // where its surface was in the frame before. Irradiance does not depend on the view, so the
@@ -21,6 +22,10 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 1, binding = 0) uniform sampler2D gb_position;
 layout(set = 1, binding = 1) uniform sampler2D gb_normals;
 layout(set = 1, binding = 2, rgba32f) uniform writeonly image2D gathered;
+// The specular cone where it is wide (WIDE_SPECULAR): its radiance (rgb), a 1; else a 0. It
+// depends on the view, so it is traced every frame and kept in no history.
+layout(set = 1, binding = 9) uniform sampler2D gb_emission;
+layout(set = 1, binding = 10, rgba16f) uniform writeonly image2D gathered_specular;
 #ifdef TEMPORAL
 // Per block, the frame before's (in) and this frame's (out): the cones' sums (irradiance rgb,
 // occlusion a), where the block's surface lies (xyz) with the weight of the cones summed (w:
@@ -95,6 +100,7 @@ void main() {
     vec4 pos = texelFetch(gb_position, px, 0);
     if (pos.a == 0.0) {
         imageStore(gathered, q, vec4(0.0));
+        imageStore(gathered_specular, q, vec4(0.0));
 #ifdef TEMPORAL
         imageStore(history_out, q, vec4(0.0));
         imageStore(history_place_out, q, vec4(0.0));
@@ -110,6 +116,14 @@ void main() {
     vec3 origin = cone_start(p, n, geo, t0);
     mat3 frame_n = tangent_frame(n);
     float whole = cone_set_weight();
+
+    float tan_half = specular_aperture(texelFetch(gb_emission, px, 0).a);
+    vec4 specular = vec4(0.0);
+    if (frame.trace.z > 0.0 && tan_half >= WIDE_SPECULAR) {
+        vec3 r = reflect(normalize(p - frame.eye.xyz), n);
+        specular = vec4(trace_cone(origin, r, tan_half, t0, frame.cone.z * frame.grid.w).radiance, 1.0);
+    }
+    imageStore(gathered_specular, q, specular);
 #ifdef TEMPORAL
     vec4 sums;
     float weight;

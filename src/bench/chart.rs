@@ -194,7 +194,7 @@ pub fn draw(points: &[Point], title: &str) -> RgbImage {
     }
     c.line((LEFT, TOP), (LEFT, BOTTOM), BLACK, 2);
     c.line((LEFT, BOTTOM), (RIGHT, BOTTOM), BLACK, 2);
-    let xt = "frame wall time, ms (log)";
+    let xt = "still frame wall time, ms (log)";
     c.text(
         (LEFT + RIGHT - text_width(xt, 2)) / 2,
         H as i32 - 36,

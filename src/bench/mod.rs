@@ -128,13 +128,32 @@ pub struct Row {
     pub index: usize,
     pub label: String,
     pub gi: GiSettings,
-    /// GPU time per pass (timestamps), in the order the passes ran.
+    /// GPU time per pass (timestamps) in the frames after the lights moved, in the order the
+    /// passes ran.
     pub passes: Vec<(String, Spread)>,
-    /// Submission to fence per frame.
+    /// Submission to fence per frame after the lights moved (shadows, voxels and trace run).
     pub frame: Spread,
+    /// Submission to fence per still frame (G-buffer, direct light and trace; with a temporal
+    /// trace, once its history is complete).
+    pub still: Spread,
+    /// The still frame's error.
     pub metrics: Metrics,
-    /// Not beaten in both frame time and relMSE by another setting.
+    /// The error of the first frame after the lights moved (a temporal trace's worst).
+    pub relit_metrics: Metrics,
+    /// How long the path tracer takes to reach the still frame's relMSE (None: not within
+    /// the samples tried, see [`PtPoint`]).
+    pub pt_ms: Option<f64>,
+    /// Not beaten in both still-frame time and relMSE by another setting.
     pub pareto: bool,
+}
+
+/// The path tracer (`voxgi reference`, seed 1: not the reference's own samples) at one
+/// sample count: its time without the BVH build, and its relMSE against the reference.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PtPoint {
+    pub spp: u32,
+    pub ms: f64,
+    pub rel_mse: f64,
 }
 
 /// Everything a run measured, and what it was run on.
@@ -149,6 +168,8 @@ pub struct BenchResults {
     /// cache has no variance image).
     pub reference_noise: Option<f64>,
     pub rows: Vec<Row>,
+    /// The path tracer's time against its error, 1, 2, 4, .. spp.
+    pub pt_curve: Vec<PtPoint>,
 }
 
 /// The words of a command line joined for a POSIX shell: any word with characters a shell
@@ -338,11 +359,13 @@ impl BenchOptions {
     }
 }
 
-/// What one setting's frames measured, and its image.
+/// What one setting's frames measured, and its images.
 struct Measured {
     passes: Vec<(String, Spread)>,
     frame: Spread,
+    still: Spread,
     image: RadianceImage,
+    relit_image: RadianceImage,
 }
 
 /// Warm-up frames, then `frames` timed ones, then one with readback for the image.
@@ -387,17 +410,87 @@ fn measure(
         })
         .unwrap_or_default();
     let frame = Spread::of(&r.frame_ms).ok_or("no frame was timed")?;
-    r.render(true).map_err(|e| e.to_string())?;
-    let image = RadianceImage {
+    let image = |r: &Renderer| RadianceImage {
         width: opts.width,
         height: opts.height,
         pixels: r.radiance(),
     };
+    // The first frame after the lights moved, as shown: a temporal trace starts over there.
+    r.relight();
+    r.render(true).map_err(|e| e.to_string())?;
+    let relit_image = image(&r);
+    // Still frames: a temporal trace completes its cone set over the first ones.
+    for _ in 0..setting.gi.temporal {
+        r.render(false).map_err(|e| e.to_string())?;
+    }
+    r.frame_ms.clear();
+    for _ in 0..opts.frames {
+        r.render(false).map_err(|e| e.to_string())?;
+    }
+    let still = Spread::of(&r.frame_ms).ok_or("no frame was timed")?;
+    r.render(true).map_err(|e| e.to_string())?;
     Ok(Measured {
         passes,
         frame,
-        image,
+        still,
+        image: image(&r),
+        relit_image,
     })
+}
+
+/// The path tracer's error at 1, 2, 4, .. spp until it is at most `target` relMSE or reaches
+/// a quarter of the reference's samples.
+fn path_tracer_curve(
+    scene: &Scene,
+    opts: &BenchOptions,
+    reference: &RadianceImage,
+    target: f64,
+) -> Result<Vec<PtPoint>, BenchError> {
+    let mut curve = Vec::new();
+    let mut spp = 1;
+    loop {
+        let settings = ReferenceSettings {
+            width: opts.width,
+            height: opts.height,
+            spp,
+            seed: 1,
+            ..Default::default()
+        };
+        let r = reference::render_full(scene, &settings);
+        let m = metrics::try_compare(&r.image, reference, opts.exposure)
+            .map_err(|e| BenchError::Options(format!("path tracer at {spp} spp: {e}")))?;
+        let point = PtPoint {
+            spp,
+            ms: (r.seconds - r.setup_seconds) * 1e3,
+            rel_mse: m.rel_mse,
+        };
+        eprintln!(
+            "path tracer: {spp} spp {:.1} ms relMSE {:.5}",
+            point.ms, point.rel_mse
+        );
+        curve.push(point);
+        if m.rel_mse <= target || spp * 2 > (opts.ref_spp / 4).max(1) {
+            return Ok(curve);
+        }
+        spp *= 2;
+    }
+}
+
+/// The path tracer's time to reach relMSE `target`: interpolated between the sample counts
+/// that bracket it (log time against log error); below 1 spp's error, 1 spp's time scaled as
+/// error goes with 1 / samples. None when even the most samples tried do not reach it.
+pub fn equal_error_ms(curve: &[PtPoint], target: f64) -> Option<f64> {
+    let k = curve.iter().position(|p| p.rel_mse <= target)?;
+    let b = curve[k];
+    if k == 0 {
+        return Some(b.ms * (b.rel_mse / target).max(0.0));
+    }
+    let a = curve[k - 1];
+    if a.rel_mse <= b.rel_mse || target <= 0.0 {
+        return Some(b.ms);
+    }
+    let t = (target.ln() - a.rel_mse.ln()) / (b.rel_mse.ln() - a.rel_mse.ln());
+    Some((a.ms.ln() + t * (b.ms.ln() - a.ms.ln())).exp())
 }
 
 /// Runs the benchmark and writes its outputs into `opts.out_dir` (all of them, or none on
@@ -448,7 +541,9 @@ pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
         let Measured {
             passes,
             frame,
+            still,
             image,
+            relit_image,
         } = measure(&ctx, &scene, opts, setting).map_err(fail)?;
         if opts.validate && ctx.stats.count() > 0 {
             return Err(fail(format!(
@@ -458,14 +553,16 @@ pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
         }
         let m = metrics::try_compare(&image, &reference, opts.exposure)
             .map_err(|e| fail(e.to_string()))?;
+        let relit = metrics::try_compare(&relit_image, &reference, opts.exposure)
+            .map_err(|e| fail(e.to_string()))?;
         eprintln!(
-            "[{}/{n}] {:<28} frame {:9.3} ms (min {:.3}, max {:.3})  relMSE {:.5}  FLIP {:.4}",
+            "[{}/{n}] {:<28} still {:9.3} ms  relit {:9.3} ms  relMSE {:.5} (relit {:.5})  FLIP {:.4}",
             k + 1,
             setting.label,
+            still.median,
             frame.median,
-            frame.min,
-            frame.max,
             m.rel_mse,
+            relit.rel_mse,
             m.flip
         );
         rows.push(Row {
@@ -474,15 +571,26 @@ pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
             gi: setting.gi.clone(),
             passes,
             frame,
+            still,
             metrics: m,
+            relit_metrics: relit,
+            pt_ms: None,
             pareto: false,
         });
     }
     drop(ctx);
 
+    let target = rows
+        .iter()
+        .map(|r| r.metrics.rel_mse)
+        .fold(f64::INFINITY, f64::min);
+    let pt_curve = path_tracer_curve(&scene, opts, &reference, target)?;
+    for row in rows.iter_mut() {
+        row.pt_ms = equal_error_ms(&pt_curve, row.metrics.rel_mse);
+    }
     let points: Vec<(f64, f64)> = rows
         .iter()
-        .map(|r| (r.frame.median, r.metrics.rel_mse))
+        .map(|r| (r.still.median, r.metrics.rel_mse))
         .collect();
     for (row, on) in rows.iter_mut().zip(pareto::front(&points)) {
         row.pareto = on;
@@ -494,6 +602,7 @@ pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
         reference_cached,
         reference_noise,
         rows,
+        pt_curve,
     };
     report::write_all(&results, &opts.out_dir)?;
     eprintln!(
@@ -516,6 +625,21 @@ mod tests {
             "--sweep 'voxels=32;paper=0,1'"
         );
         assert_eq!(w(&["it's", ""]), "'it'\\''s' ''");
+    }
+
+    #[test]
+    fn equal_error_time_interpolates_the_path_tracer_log_log() {
+        let p = |spp: u32, ms: f64, rel_mse: f64| PtPoint { spp, ms, rel_mse };
+        // Error halving with each doubling of time: 1/spp.
+        let curve = [p(1, 10.0, 0.08), p(2, 20.0, 0.04), p(4, 40.0, 0.02)];
+        let at = |e: f64| equal_error_ms(&curve, e).unwrap();
+        assert!((at(0.04) - 20.0).abs() < 1e-9);
+        // Between 2 and 4 spp: error 0.04 / 1.5 takes 30 ms.
+        assert!((at(0.04 / 1.5) - 30.0).abs() < 1e-9, "{}", at(0.04 / 1.5));
+        // Above 1 spp's error: less than 1 spp's time, in proportion.
+        assert!((at(0.16) - 5.0).abs() < 1e-9);
+        // Below every point: not reached.
+        assert_eq!(equal_error_ms(&curve, 0.01), None);
     }
 
     #[test]

@@ -92,6 +92,16 @@ fn gi_fields(r: &Row) -> Vec<(&'static str, String)> {
         .collect()
 }
 
+/// The path tracer's time to the row's relMSE (NaN when it did not get there).
+fn pt_ms(r: &Row) -> f64 {
+    r.pt_ms.unwrap_or(f64::NAN)
+}
+
+/// How many times faster than the path tracer the still frame is, at equal relMSE.
+fn speedup(r: &Row) -> f64 {
+    pt_ms(r) / r.still.median
+}
+
 /// One line per setting, in sweep order; a pass a setting did not run is an empty cell.
 pub fn csv(res: &BenchResults) -> String {
     let passes = pass_names(&res.rows);
@@ -101,6 +111,9 @@ pub fn csv(res: &BenchResults) -> String {
     }
     head.extend(
         [
+            "still_wall_median_ms",
+            "still_wall_min_ms",
+            "still_wall_max_ms",
             "frame_wall_median_ms",
             "frame_wall_min_ms",
             "frame_wall_max_ms",
@@ -115,12 +128,26 @@ pub fn csv(res: &BenchResults) -> String {
             format!("{s}_max_ms"),
         ]);
     }
-    head.extend(["relMSE", "MAE", "RMSE", "FLIP", "pareto"].map(String::from));
+    head.extend(
+        [
+            "relMSE",
+            "MAE",
+            "RMSE",
+            "FLIP",
+            "relit_relMSE",
+            "relit_FLIP",
+            "pt_equal_error_ms",
+            "speedup_vs_pt",
+            "pareto",
+        ]
+        .map(String::from),
+    );
     let mut out = head.join(",");
     out.push('\n');
     for r in &res.rows {
         let mut f: Vec<String> = vec![r.index.to_string(), csv_field(&r.label)];
         f.extend(gi_fields(r).into_iter().map(|(_, v)| v));
+        f.extend([r.still.median, r.still.min, r.still.max].map(|v| num(v, "")));
         f.extend([r.frame.median, r.frame.min, r.frame.max].map(|v| num(v, "")));
         for p in &passes {
             match r.passes.iter().find(|(n, _)| n == p) {
@@ -130,6 +157,9 @@ pub fn csv(res: &BenchResults) -> String {
         }
         let m = &r.metrics;
         f.extend([m.rel_mse, m.mae, m.rmse, m.flip].map(|v| num(v, "")));
+        let rm = &r.relit_metrics;
+        f.extend([rm.rel_mse, rm.flip].map(|v| num(v, "")));
+        f.extend([pt_ms(r), speedup(r)].map(|v| num(v, "")));
         f.push(r.pareto.to_string());
         out.push_str(&f.join(","));
         out.push('\n');
@@ -162,6 +192,19 @@ pub fn json(res: &BenchResults) -> String {
         res.reference_noise
             .map_or("null".into(), |v| num(v, "null"))
     );
+    let curve: Vec<String> = res
+        .pt_curve
+        .iter()
+        .map(|p| {
+            format!(
+                "{{\"spp\": {}, \"ms\": {}, \"relMSE\": {}}}",
+                p.spp,
+                num(p.ms, "null"),
+                num(p.rel_mse, "null")
+            )
+        })
+        .collect();
+    let _ = writeln!(out, "  \"path_tracer\": [{}],", curve.join(", "));
     out.push_str("  \"settings\": [");
     for (i, r) in res.rows.iter().enumerate() {
         out.push_str(if i == 0 { "\n" } else { ",\n" });
@@ -182,6 +225,7 @@ pub fn json(res: &BenchResults) -> String {
                 num(s.max, "null")
             )
         };
+        f.push(format!("\"still_wall\": {}", spread(&r.still)));
         f.push(format!("\"frame_wall\": {}", spread(&r.frame)));
         let passes: Vec<String> = r
             .passes
@@ -195,6 +239,10 @@ pub fn json(res: &BenchResults) -> String {
             ("MAE", m.mae),
             ("RMSE", m.rmse),
             ("FLIP", m.flip),
+            ("relit_relMSE", r.relit_metrics.rel_mse),
+            ("relit_FLIP", r.relit_metrics.flip),
+            ("pt_equal_error_ms", pt_ms(r)),
+            ("speedup_vs_pt", speedup(r)),
         ] {
             f.push(format!("\"{n}\": {}", num(v, "null")));
         }
@@ -225,10 +273,12 @@ pub fn markdown(res: &BenchResults) -> String {
     );
     let _ = writeln!(
         out,
-        "- time: median (min to max) over {} frame{} after {} warm-up frame{}, each after the \
-         lights moved (shadow maps, voxel lighting and bounces run; a still frame only \
-         traces); frame = submission to fence (wall clock), passes = GPU timestamps (on \
-         lavapipe they can miss compute work: trust the frame time there)",
+        "- time: median (min to max) over {} frame{} after {} warm-up frame{}, submission to \
+         fence (wall clock). still: a still frame (G-buffer, direct light, trace; with \
+         --temporal N, after the N frames that complete its history); relit: a frame after \
+         the lights moved (shadow maps, voxel lighting and bounces run; a temporal trace \
+         starts over). GPU passes: timestamps of the relit frames (on lavapipe they can miss \
+         compute work: trust the wall time there)",
         o.frames,
         if o.frames == 1 { "" } else { "s" },
         o.warmup,
@@ -254,16 +304,28 @@ pub fn markdown(res: &BenchResults) -> String {
          at exposure {}",
         o.exposure
     );
+    let curve: Vec<String> = res
+        .pt_curve
+        .iter()
+        .map(|p| format!("{} spp {} ms {}", p.spp, sig(p.ms), sig(p.rel_mse)))
+        .collect();
     let _ = writeln!(
         out,
-        "- **bold**: on the Pareto front (no other setting is both faster and more accurate); \
-         `#` is the point's number in pareto.png\n"
+        "- path tracer (`voxgi reference`, another seed, without its BVH build): {}. PT ms: \
+         its time to the still frame's relMSE (log-log between those), speed-up: that over \
+         the still frame's",
+        curve.join(", ")
+    );
+    let _ = writeln!(
+        out,
+        "- **bold**: on the Pareto front of still frames (no other setting is both faster and \
+         more accurate); `#` is the point's number in pareto.png\n"
     );
     let mut sorted: Vec<&Row> = res.rows.iter().collect();
-    sorted.sort_by(|a, b| a.frame.median.total_cmp(&b.frame.median));
+    sorted.sort_by(|a, b| a.still.median.total_cmp(&b.still.median));
     out.push_str(
-        "| # | setting | frame ms | min to max | GPU passes ms | relMSE | MAE | RMSE | FLIP | Pareto |\n\
-         |---|---|---:|---:|---:|---:|---:|---:|---:|:---:|\n",
+        "| # | setting | still ms | relit ms | GPU passes ms | relMSE | FLIP | relit relMSE | PT ms | speed-up | Pareto |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|:---:|\n",
     );
     for r in &sorted {
         let label = if r.pareto {
@@ -275,20 +337,20 @@ pub fn markdown(res: &BenchResults) -> String {
         let m = &r.metrics;
         let _ = writeln!(
             out,
-            "| {} | {label} | {} | {} to {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {label} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             r.index,
+            sig(r.still.median),
             sig(r.frame.median),
-            sig(r.frame.min),
-            sig(r.frame.max),
             if r.passes.is_empty() {
                 "-".into()
             } else {
                 sig(gpu)
             },
             sig(m.rel_mse),
-            sig(m.mae),
-            sig(m.rmse),
             sig(m.flip),
+            sig(r.relit_metrics.rel_mse),
+            sig(pt_ms(r)),
+            sig(speedup(r)),
             if r.pareto { "yes" } else { "" }
         );
     }
@@ -321,7 +383,7 @@ pub fn chart_png(res: &BenchResults) -> Result<Vec<u8>, String> {
         .map(|r| chart::Point {
             index: r.index,
             label: r.label.clone(),
-            time: r.frame.median,
+            time: r.still.median,
             error: r.metrics.rel_mse,
             paper: r.gi.paper,
             pareto: r.pareto,
@@ -405,6 +467,11 @@ mod tests {
                 },
             )],
             frame: Spread {
+                median: 2.0 * t,
+                min: 2.0 * t,
+                max: 2.0 * t,
+            },
+            still: Spread {
                 median: t,
                 min: t,
                 max: t,
@@ -415,6 +482,13 @@ mod tests {
                 rmse: e,
                 flip: e,
             },
+            relit_metrics: Metrics {
+                rel_mse: 2.0 * e,
+                mae: e,
+                rmse: e,
+                flip: e,
+            },
+            pt_ms: Some(10.0 * t),
             pareto,
         };
         BenchResults {
@@ -427,6 +501,11 @@ mod tests {
             reference_path: "cache/r.exr".into(),
             reference_cached: false,
             reference_noise: Some(1e-4),
+            pt_curve: vec![crate::bench::PtPoint {
+                spp: 1,
+                ms: 5.0,
+                rel_mse: 0.5,
+            }],
             rows: vec![
                 row(1, GiSettings::default(), 20.0, 0.1, true),
                 row(2, GiSettings::paper(128), 10.0, f64::NAN, false),
@@ -455,6 +534,9 @@ mod tests {
         let default = md.find("| 1 | **64^3** |").unwrap();
         assert!(paper < default, "{md}");
         assert!(md.contains("voxgi bench a.gltf"));
+        // still 20 ms, relit 40, path tracer 200 ms: 10 times faster.
+        assert!(md.contains("| 1 | **64^3** | 20.00 | 40.00 |"), "{md}");
+        assert!(md.contains("| 200.0 | 10.00 | yes |"), "{md}");
     }
 
     #[test]

@@ -67,14 +67,19 @@ impl TraceLayout {
 pub struct TraceFrame {
     /// The camera of the frame before (the history's).
     pub prev_view_proj: Mat4,
-    /// Frames since the renderer began: picks the subset of cones to trace.
+    /// Frames since the history began (0: this frame starts it): picks the subset of cones
+    /// to trace, and which history is read.
     pub index: u64,
     /// Drop the history (the light in the voxels changed, the images are new, or a cut).
     pub reset: bool,
 }
 
 /// The trace's table: the frame's images and the volumes cones sample.
-fn trace_table(volumes: &Volumes, frame: &FrameImages, gathered: Option<&Image>) -> Bindings {
+fn trace_table(
+    volumes: &Volumes,
+    frame: &FrameImages,
+    gathered: Option<(&Image, &Image)>,
+) -> Bindings {
     let table = frame
         .gbuffer
         .iter()
@@ -83,8 +88,12 @@ fn trace_table(volumes: &Volumes, frame: &FrameImages, gathered: Option<&Image>)
             t.sampled_with(name, img, frame.sampler)
         })
         .image("radiance_out", frame.out, Usage::ReadWrite)
-        .with(gathered, |t, g| {
-            t.sampled_with("gathered", g, frame.sampler)
+        .with(gathered, |t, (g, s)| {
+            t.sampled_with("gathered", g, frame.sampler).sampled_with(
+                "gathered_specular",
+                s,
+                frame.sampler,
+            )
         });
     cone_volumes(table, volumes, true)
 }
@@ -119,6 +128,7 @@ impl History {
 struct Gather {
     pass: Pass,
     gathered: Image,
+    specular: Image,
     histories: Vec<History>,
 }
 
@@ -127,7 +137,7 @@ impl Gather {
         ctx: &Arc<Context>,
         frame: &FrameImages,
         layout: TraceLayout,
-    ) -> VkResult<(Image, Vec<History>)> {
+    ) -> VkResult<(Image, Image, Vec<History>)> {
         let (w, h) = frame.size;
         let (bw, bh) = (w.div_ceil(layout.scale), h.div_ceil(layout.scale));
         let gathered = Image::new(
@@ -140,6 +150,16 @@ impl Gather {
                 vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED,
             ),
         )?;
+        let specular = Image::new(
+            ctx,
+            "trace gathered specular",
+            ImageDesc::d2(
+                vk::Format::R16G16B16A16_SFLOAT,
+                bw,
+                bh,
+                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED,
+            ),
+        )?;
         let histories = if layout.temporal > 0 {
             (0..2)
                 .map(|k| History::new(ctx, bw, bh, k))
@@ -147,7 +167,7 @@ impl Gather {
         } else {
             Vec::new()
         };
-        Ok((gathered, histories))
+        Ok((gathered, specular, histories))
     }
 
     /// Instance k reads history k and writes the other one.
@@ -155,13 +175,16 @@ impl Gather {
         volumes: &Volumes,
         frame: &FrameImages,
         gathered: &Image,
+        specular: &Image,
         histories: &[History],
     ) -> Vec<Bindings> {
         let base = || {
             let t = Bindings::new()
                 .sampled_with("gb_position", &frame.gbuffer[0], frame.sampler)
                 .sampled_with("gb_normals", &frame.gbuffer[1], frame.sampler)
-                .image("gathered", gathered, Usage::Write);
+                .sampled_with("gb_emission", &frame.gbuffer[3], frame.sampler)
+                .image("gathered", gathered, Usage::Write)
+                .image("gathered_specular", specular, Usage::Write);
             cone_volumes(t, volumes, true)
         };
         if histories.is_empty() {
@@ -188,7 +211,7 @@ impl Gather {
         frame: &FrameImages,
         layout: TraceLayout,
     ) -> VkResult<Gather> {
-        let (gathered, histories) = Gather::images(ctx, frame, layout)?;
+        let (gathered, specular, histories) = Gather::images(ctx, frame, layout)?;
         let shader = if layout.temporal > 0 {
             "diffuse_gather.comp:TEMPORAL"
         } else {
@@ -198,12 +221,13 @@ impl Gather {
             ctx,
             crate::vk::Program::Compute(shader),
             &[scene],
-            Gather::tables(volumes, frame, &gathered, &histories),
+            Gather::tables(volumes, frame, &gathered, &specular, &histories),
             GATHER_PUSH_SIZE,
         )?;
         Ok(Gather {
             pass,
             gathered,
+            specular,
             histories,
         })
     }
@@ -248,7 +272,11 @@ impl Trace {
             ctx,
             &shader,
             &[scene],
-            trace_table(volumes, frame, gather.as_ref().map(|g| &g.gathered)),
+            trace_table(
+                volumes,
+                frame,
+                gather.as_ref().map(|g| (&g.gathered, &g.specular)),
+            ),
             TRACE_PUSH_SIZE,
         )?;
         let view = Pass::compute(
@@ -281,18 +309,19 @@ impl Trace {
                 .histories
                 .iter()
                 .flat_map(|h| [&h.sums, &h.place, &h.normal]);
-            for img in old.chain([&g.gathered]) {
+            for img in old.chain([&g.gathered, &g.specular]) {
                 states.forget(img.raw);
             }
-            let (gathered, histories) = Gather::images(ctx, frame, self.layout)?;
-            let tables = Gather::tables(volumes, frame, &gathered, &histories);
+            let (gathered, specular, histories) = Gather::images(ctx, frame, self.layout)?;
+            let tables = Gather::tables(volumes, frame, &gathered, &specular, &histories);
             for (k, t) in tables.into_iter().enumerate() {
                 g.pass.rebind(ctx, k, t, &[scene])?;
             }
             g.gathered = gathered;
+            g.specular = specular;
             g.histories = histories;
         }
-        let gathered = self.gather.as_ref().map(|g| &g.gathered);
+        let gathered = self.gather.as_ref().map(|g| (&g.gathered, &g.specular));
         self.trace
             .rebind(ctx, 0, trace_table(volumes, frame, gathered), &[scene])?;
         self.view

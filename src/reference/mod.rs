@@ -72,6 +72,8 @@ pub struct ReferenceOutput {
     /// Samples dropped because they came out NaN or infinite (should stay 0).
     pub bad_samples: u64,
     pub seconds: f64,
+    /// Of `seconds`, what building the scene's BVH took (before any sample).
+    pub setup_seconds: f64,
 }
 
 /// Renders the scene's camera view: linear radiance per pixel.
@@ -86,6 +88,7 @@ pub fn render_full(scene: &Scene, settings: &ReferenceSettings) -> ReferenceOutp
     let spp = settings.spp.max(1);
     let world = World::new(scene);
     let camera = CameraRays::new(scene, w, h);
+    let setup_seconds = start.elapsed().as_secs_f64();
     let bad = AtomicU64::new(0);
     let progress = Progress::new(settings.progress && std::io::stderr().is_terminal(), h);
     let mut rows: Vec<Vec<([f32; 3], [f32; 3])>> = vec![Vec::new(); h as usize];
@@ -137,6 +140,7 @@ pub fn render_full(scene: &Scene, settings: &ReferenceSettings) -> ReferenceOutp
         },
         bad_samples: bad.into_inner(),
         seconds: start.elapsed().as_secs_f64(),
+        setup_seconds,
     }
 }
 

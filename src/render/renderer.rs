@@ -198,8 +198,8 @@ pub struct Renderer {
     /// The scene's bounds (light views are fitted to them).
     bounds: Aabb,
     specular_needed: bool,
-    /// Frames rendered, and the camera of the last one (the temporal trace's history).
-    frame_index: u64,
+    /// Frames since the temporal trace's history began, and the camera of the last one.
+    history_frames: u64,
     prev_view_proj: Mat4,
     /// The next frame drops the temporal trace's history.
     history_reset: bool,
@@ -298,7 +298,7 @@ impl Renderer {
                 .materials
                 .iter()
                 .any(|m| m.metallic > 0.0 || m.specular_factor > 0.0),
-            frame_index: 0,
+            history_frames: 0,
             prev_view_proj: Mat4::IDENTITY,
             history_reset: true,
             settings,
@@ -392,6 +392,11 @@ impl Renderer {
         if self.gi.as_ref().is_some_and(|gi| gi.dirty != Dirty::NONE) {
             self.history_reset = true;
         }
+        // A history that starts over traces the subsets from the first again: the same frames
+        // give the same images however many came before.
+        if self.history_reset {
+            self.history_frames = 0;
+        }
         let ctx = self.ctx.clone();
         let cmd = self.commands.begin()?;
         let mut states = std::mem::take(&mut self.states);
@@ -416,7 +421,7 @@ impl Renderer {
         self.timer = timer;
         submitted?;
         self.shadows.dirty.fill(false);
-        self.frame_index += 1;
+        self.history_frames += 1;
         self.prev_view_proj = uniforms.view_proj;
         self.history_reset = false;
         // The voxels now hold the geometry and its light until a node or a light moves.
@@ -555,7 +560,7 @@ impl Renderer {
         let size = (self.targets.width, self.targets.height);
         let time = TraceFrame {
             prev_view_proj: self.prev_view_proj,
-            index: self.frame_index,
+            index: self.history_frames,
             reset: self.history_reset,
         };
         gi.trace.record(
