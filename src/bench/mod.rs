@@ -439,7 +439,7 @@ fn measure(
 }
 
 /// The path tracer's error at 1, 2, 4, .. spp until it is at most `target` relMSE or reaches
-/// a quarter of the reference's samples.
+/// half the reference's samples.
 fn path_tracer_curve(
     scene: &Scene,
     opts: &BenchOptions,
@@ -469,7 +469,7 @@ fn path_tracer_curve(
             point.ms, point.rel_mse
         );
         curve.push(point);
-        if m.rel_mse <= target || spp * 2 > (opts.ref_spp / 4).max(1) {
+        if m.rel_mse <= target || spp * 2 > (opts.ref_spp / 2).max(1) {
             return Ok(curve);
         }
         spp *= 2;
@@ -478,9 +478,23 @@ fn path_tracer_curve(
 
 /// The path tracer's time to reach relMSE `target`: interpolated between the sample counts
 /// that bracket it (log time against log error); below 1 spp's error, 1 spp's time scaled as
-/// error goes with 1 / samples. None when even the most samples tried do not reach it.
+/// error goes with 1 / samples; past the most samples tried, extrapolated along the last two
+/// points' error = a / spp + b (b: the reference's own noise and the tracer's bias). None when
+/// the curve is empty or `target` is at or below b (no sample count gets there).
 pub fn equal_error_ms(curve: &[PtPoint], target: f64) -> Option<f64> {
-    let k = curve.iter().position(|p| p.rel_mse <= target)?;
+    let Some(k) = curve.iter().position(|p| p.rel_mse <= target) else {
+        let [.., p, q] = curve else {
+            return None;
+        };
+        let (x1, x2) = (1.0 / p.spp as f64, 1.0 / q.spp as f64);
+        let a = (p.rel_mse - q.rel_mse) / (x1 - x2);
+        let b = q.rel_mse - a * x2;
+        if a.is_nan() || a <= 0.0 || target <= b {
+            return None;
+        }
+        let spp = a / (target - b);
+        return Some(q.ms * spp / q.spp as f64);
+    };
     let b = curve[k];
     if k == 0 {
         return Some(b.ms * (b.rel_mse / target).max(0.0));
@@ -638,8 +652,13 @@ mod tests {
         assert!((at(0.04 / 1.5) - 30.0).abs() < 1e-9, "{}", at(0.04 / 1.5));
         // Above 1 spp's error: less than 1 spp's time, in proportion.
         assert!((at(0.16) - 5.0).abs() < 1e-9);
-        // Below every point: not reached.
-        assert_eq!(equal_error_ms(&curve, 0.01), None);
+        // Below every point: along error = 0.08 / spp, 8 spp.
+        assert!((at(0.01) - 80.0).abs() < 1e-9, "{}", at(0.01));
+        // An error floor of 0.01 (the reference's noise): 0.012 takes 32 spp, 0.01 never.
+        let floor = [p(1, 10.0, 0.09), p(2, 20.0, 0.05)];
+        let t = equal_error_ms(&floor, 0.0125).unwrap();
+        assert!((t - 320.0).abs() < 1e-6, "{t}");
+        assert_eq!(equal_error_ms(&floor, 0.01), None);
     }
 
     #[test]

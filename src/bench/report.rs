@@ -312,8 +312,8 @@ pub fn markdown(res: &BenchResults) -> String {
     let _ = writeln!(
         out,
         "- path tracer (`voxgi reference`, another seed, without its BVH build): {}. PT ms: \
-         its time to the still frame's relMSE (log-log between those), speed-up: that over \
-         the still frame's",
+         its time to the still frame's relMSE (log-log between those; past the last, along \
+         error = a / spp + b through the last two), speed-up: that over the still frame's",
         curve.join(", ")
     );
     let _ = writeln!(
