@@ -236,7 +236,8 @@ struct RenderCmd {
     /// .exr: linear radiance (RGB float); .png: display image
     #[arg(long, default_value = "voxgi.png")]
     out: PathBuf,
-    /// Frames to render (timings are medians over them; default 1, 5 with --timings)
+    /// Frames to render (timings are medians over them; default 1, 5 with --timings; at least
+    /// N with --temporal N, which traces the whole cone set over N frames)
     #[arg(long, value_name = "N")]
     frames: Option<u32>,
     /// The moving scene (animations, --spin) as it is T seconds in
@@ -386,6 +387,10 @@ struct BenchCmd {
     /// Samples per pixel of the reference (cached in DIR/cache by scene content, size and spp)
     #[arg(long, default_value_t = 256)]
     ref_spp: u32,
+    /// The moving camera: swung about the scene's vertical axis by up to DEG degrees and back
+    /// over 8 frames (timed), its last frame at the start again (its error measured)
+    #[arg(long, value_name = "DEG", default_value_t = 10.0)]
+    orbit: f32,
     #[command(flatten)]
     sun: SunOpt,
     /// Display exposure of both images for FLIP, in stops
@@ -587,7 +592,13 @@ fn render(c: RenderCmd) -> Result<()> {
     }
     let (mut settings, mut scene, motion) = c.show.load()?;
     let (width, height, timings) = (settings.width, settings.height, settings.timings);
-    let frames = c.frames.unwrap_or(if timings { 5 } else { 1 }).max(1);
+    // A temporal trace shows the whole cone set from its N-th frame on.
+    let temporal = settings.gi.temporal;
+    let frames = c
+        .frames
+        .unwrap_or(if timings { 5 } else { 1 })
+        .max(temporal)
+        .max(1);
     let time = c.time.unwrap_or(0.0);
     if !time.is_finite() || time < 0.0 {
         bail!("--time {time} must be a finite number of seconds, 0 or more");
@@ -836,6 +847,7 @@ fn bench(c: BenchCmd) -> Result<()> {
         frames: c.frames,
         warmup: c.warmup,
         ref_spp: c.ref_spp,
+        orbit_deg: c.orbit,
         extra_lights: c.sun.sun.into_iter().collect(),
         exposure: c.exposure,
         validate: c.device.validate,

@@ -39,6 +39,9 @@ pub struct BenchOptions {
     pub warmup: u32,
     /// Samples per pixel of the reference.
     pub ref_spp: u32,
+    /// The moving camera's swing about the scene's vertical axis, in degrees (see
+    /// [`ORBIT_FRAMES`]).
+    pub orbit_deg: f32,
     /// Lights added to the scene (the command line's `--sun`), part of the cache key.
     pub extra_lights: Vec<Light>,
     /// Display exposure of both images for FLIP.
@@ -61,6 +64,7 @@ impl Default for BenchOptions {
             frames: 10,
             warmup: 2,
             ref_spp: 256,
+            orbit_deg: 10.0,
             extra_lights: Vec::new(),
             exposure: 0.0,
             validate: false,
@@ -136,8 +140,12 @@ pub struct Row {
     /// Submission to fence per still frame (G-buffer, direct light and trace; with a temporal
     /// trace, once its history is complete).
     pub still: Spread,
+    /// Submission to fence per frame of the moving camera.
+    pub moving: Spread,
     /// The still frame's error.
     pub metrics: Metrics,
+    /// The error of the moving camera's last frame, back where it started.
+    pub moving_metrics: Metrics,
     /// The error of the first frame after the lights moved (a temporal trace's worst).
     pub relit_metrics: Metrics,
     /// How long the path tracer takes to reach the still frame's relMSE (None: not within
@@ -346,6 +354,12 @@ impl BenchOptions {
                 self.ref_spp
             ));
         }
+        if !(self.orbit_deg.is_finite() && self.orbit_deg.abs() <= 180.0) {
+            return bad(format!(
+                "--orbit {} is out of range (-180 to 180 degrees)",
+                self.orbit_deg
+            ));
+        }
         if !self.exposure.is_finite() {
             return bad("--exposure must be finite".into());
         }
@@ -364,9 +378,14 @@ struct Measured {
     passes: Vec<(String, Spread)>,
     frame: Spread,
     still: Spread,
+    moving: Spread,
     image: RadianceImage,
     relit_image: RadianceImage,
+    moving_image: RadianceImage,
 }
+
+/// Frames of the moving camera: swung out to one side and the other and back.
+pub const ORBIT_FRAMES: u32 = 8;
 
 /// Warm-up frames, then `frames` timed ones, then one with readback for the image.
 fn measure(
@@ -429,12 +448,36 @@ fn measure(
     }
     let still = Spread::of(&r.frame_ms).ok_or("no frame was timed")?;
     r.render(true).map_err(|e| e.to_string())?;
+    let still_image = image(&r);
+    // The moving camera: about the vertical axis through the scene's centre, by
+    // orbit x sin(2 pi k / ORBIT_FRAMES) in frame k, so the last frame is at the start again
+    // and its error is against the same reference, after a temporal history went through the
+    // motion (reprojected each frame, disoccluded at the sides).
+    let start = r.camera.world;
+    let centre = scene.bounds.center();
+    r.frame_ms.clear();
+    for k in 1..=ORBIT_FRAMES {
+        let phase = std::f32::consts::TAU * k as f32 / ORBIT_FRAMES as f32;
+        let angle = if k == ORBIT_FRAMES {
+            0.0
+        } else {
+            opts.orbit_deg.to_radians() * phase.sin()
+        };
+        r.camera.world = glam::Mat4::from_translation(centre)
+            * glam::Mat4::from_rotation_y(angle)
+            * glam::Mat4::from_translation(-centre)
+            * start;
+        r.render(k == ORBIT_FRAMES).map_err(|e| e.to_string())?;
+    }
+    let moving = Spread::of(&r.frame_ms).ok_or("no frame was timed")?;
     Ok(Measured {
         passes,
         frame,
         still,
-        image: image(&r),
+        moving,
+        image: still_image,
         relit_image,
+        moving_image: image(&r),
     })
 }
 
@@ -556,8 +599,10 @@ pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
             passes,
             frame,
             still,
+            moving,
             image,
             relit_image,
+            moving_image,
         } = measure(&ctx, &scene, opts, setting).map_err(fail)?;
         if opts.validate && ctx.stats.count() > 0 {
             return Err(fail(format!(
@@ -569,13 +614,18 @@ pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
             .map_err(|e| fail(e.to_string()))?;
         let relit = metrics::try_compare(&relit_image, &reference, opts.exposure)
             .map_err(|e| fail(e.to_string()))?;
+        let moved = metrics::try_compare(&moving_image, &reference, opts.exposure)
+            .map_err(|e| fail(e.to_string()))?;
         eprintln!(
-            "[{}/{n}] {:<28} still {:9.3} ms  relit {:9.3} ms  relMSE {:.5} (relit {:.5})  FLIP {:.4}",
+            "[{}/{n}] {:<28} still {:.1} ms  moving {:.1} ms  relit {:.1} ms  relMSE {:.5} \
+             (moving {:.5}, relit {:.5})  FLIP {:.4}",
             k + 1,
             setting.label,
             still.median,
+            moving.median,
             frame.median,
             m.rel_mse,
+            moved.rel_mse,
             relit.rel_mse,
             m.flip
         );
@@ -586,7 +636,9 @@ pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
             passes,
             frame,
             still,
+            moving,
             metrics: m,
+            moving_metrics: moved,
             relit_metrics: relit,
             pt_ms: None,
             pareto: false,

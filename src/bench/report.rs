@@ -114,6 +114,7 @@ pub fn csv(res: &BenchResults) -> String {
             "still_wall_median_ms",
             "still_wall_min_ms",
             "still_wall_max_ms",
+            "moving_wall_median_ms",
             "frame_wall_median_ms",
             "frame_wall_min_ms",
             "frame_wall_max_ms",
@@ -134,6 +135,7 @@ pub fn csv(res: &BenchResults) -> String {
             "MAE",
             "RMSE",
             "FLIP",
+            "moving_relMSE",
             "relit_relMSE",
             "relit_FLIP",
             "pt_equal_error_ms",
@@ -147,7 +149,7 @@ pub fn csv(res: &BenchResults) -> String {
     for r in &res.rows {
         let mut f: Vec<String> = vec![r.index.to_string(), csv_field(&r.label)];
         f.extend(gi_fields(r).into_iter().map(|(_, v)| v));
-        f.extend([r.still.median, r.still.min, r.still.max].map(|v| num(v, "")));
+        f.extend([r.still.median, r.still.min, r.still.max, r.moving.median].map(|v| num(v, "")));
         f.extend([r.frame.median, r.frame.min, r.frame.max].map(|v| num(v, "")));
         for p in &passes {
             match r.passes.iter().find(|(n, _)| n == p) {
@@ -158,7 +160,7 @@ pub fn csv(res: &BenchResults) -> String {
         let m = &r.metrics;
         f.extend([m.rel_mse, m.mae, m.rmse, m.flip].map(|v| num(v, "")));
         let rm = &r.relit_metrics;
-        f.extend([rm.rel_mse, rm.flip].map(|v| num(v, "")));
+        f.extend([r.moving_metrics.rel_mse, rm.rel_mse, rm.flip].map(|v| num(v, "")));
         f.extend([pt_ms(r), speedup(r)].map(|v| num(v, "")));
         f.push(r.pareto.to_string());
         out.push_str(&f.join(","));
@@ -226,6 +228,7 @@ pub fn json(res: &BenchResults) -> String {
             )
         };
         f.push(format!("\"still_wall\": {}", spread(&r.still)));
+        f.push(format!("\"moving_wall\": {}", spread(&r.moving)));
         f.push(format!("\"frame_wall\": {}", spread(&r.frame)));
         let passes: Vec<String> = r
             .passes
@@ -239,6 +242,7 @@ pub fn json(res: &BenchResults) -> String {
             ("MAE", m.mae),
             ("RMSE", m.rmse),
             ("FLIP", m.flip),
+            ("moving_relMSE", r.moving_metrics.rel_mse),
             ("relit_relMSE", r.relit_metrics.rel_mse),
             ("relit_FLIP", r.relit_metrics.flip),
             ("pt_equal_error_ms", pt_ms(r)),
@@ -277,12 +281,16 @@ pub fn markdown(res: &BenchResults) -> String {
          fence (wall clock). still: a still frame (G-buffer, direct light, trace; with \
          --temporal N, after the N frames that complete its history); relit: a frame after \
          the lights moved (shadow maps, voxel lighting and bounces run; a temporal trace \
-         starts over). GPU passes: timestamps of the relit frames (on lavapipe they can miss \
+         starts over); moving: the camera swung about the scene's vertical axis by up to {} \
+         degrees and back over {} frames, its error at the last (the start again). GPU \
+         passes: timestamps of the relit frames (on lavapipe they can miss \
          compute work: trust the wall time there)",
         o.frames,
         if o.frames == 1 { "" } else { "s" },
         o.warmup,
-        if o.warmup == 1 { "" } else { "s" }
+        if o.warmup == 1 { "" } else { "s" },
+        o.orbit_deg,
+        super::ORBIT_FRAMES
     );
     let noise = res.reference_noise.map_or(String::new(), |v| {
         format!("; its noise alone adds about {} to relMSE", sig(v))
@@ -324,8 +332,8 @@ pub fn markdown(res: &BenchResults) -> String {
     let mut sorted: Vec<&Row> = res.rows.iter().collect();
     sorted.sort_by(|a, b| a.still.median.total_cmp(&b.still.median));
     out.push_str(
-        "| # | setting | still ms | relit ms | GPU passes ms | relMSE | FLIP | relit relMSE | PT ms | speed-up | Pareto |\n\
-         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|:---:|\n",
+        "| # | setting | still ms | moving ms | relit ms | GPU passes ms | relMSE | FLIP | moving relMSE | relit relMSE | PT ms | speed-up | Pareto |\n\
+         |---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|:---:|\n",
     );
     for r in &sorted {
         let label = if r.pareto {
@@ -337,9 +345,10 @@ pub fn markdown(res: &BenchResults) -> String {
         let m = &r.metrics;
         let _ = writeln!(
             out,
-            "| {} | {label} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
+            "| {} | {label} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} |",
             r.index,
             sig(r.still.median),
+            sig(r.moving.median),
             sig(r.frame.median),
             if r.passes.is_empty() {
                 "-".into()
@@ -348,6 +357,7 @@ pub fn markdown(res: &BenchResults) -> String {
             },
             sig(m.rel_mse),
             sig(m.flip),
+            sig(r.moving_metrics.rel_mse),
             sig(r.relit_metrics.rel_mse),
             sig(pt_ms(r)),
             sig(speedup(r)),
@@ -476,6 +486,17 @@ mod tests {
                 min: t,
                 max: t,
             },
+            moving: Spread {
+                median: 1.5 * t,
+                min: t,
+                max: 2.0 * t,
+            },
+            moving_metrics: Metrics {
+                rel_mse: 1.5 * e,
+                mae: e,
+                rmse: e,
+                flip: e,
+            },
             metrics: Metrics {
                 rel_mse: e,
                 mae: e,
@@ -535,7 +556,10 @@ mod tests {
         assert!(paper < default, "{md}");
         assert!(md.contains("voxgi bench a.gltf"));
         // still 20 ms, relit 40, path tracer 200 ms: 10 times faster.
-        assert!(md.contains("| 1 | **64^3** | 20.00 | 40.00 |"), "{md}");
+        assert!(
+            md.contains("| 1 | **64^3** | 20.00 | 30.00 | 40.00 |"),
+            "{md}"
+        );
         assert!(md.contains("| 200.0 | 10.00 | yes |"), "{md}");
     }
 

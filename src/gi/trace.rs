@@ -328,9 +328,13 @@ impl Trace {
             .rebind(ctx, 0, view_table(volumes, frame.out), &[scene])
     }
 
-    /// Cones per pixel (`mode` below 10), or a view of the voxels. `time` says which frame
-    /// this is to the reduced-resolution and temporal trace.
-    #[allow(clippy::too_many_arguments)]
+    /// Whether the diffuse cones are traced per block or over frames, in a pass of their
+    /// own before the trace ([`Trace::record_gather`]).
+    pub fn gathers(&self) -> bool {
+        self.gather.is_some()
+    }
+
+    /// Cones per pixel (`mode` below 10), or a view of the voxels.
     pub fn record(
         &self,
         ctx: &Context,
@@ -338,14 +342,10 @@ impl Trace {
         scene_set: vk::DescriptorSet,
         size: (u32, u32),
         mode: TraceMode,
-        time: &TraceFrame,
         name: &str,
     ) {
         let d = &ctx.device;
         let debug = (mode as u32) >= 10;
-        if let (Some(gather), false) = (&self.gather, debug) {
-            self.record_gather(ctx, g, gather, scene_set, time, name);
-        }
         let (p, push) = if debug {
             (&self.view, vec![mode as u32 - 10])
         } else {
@@ -359,16 +359,19 @@ impl Trace {
         });
     }
 
-    /// The diffuse cones per block (and over frames), before the trace upsamples them.
-    fn record_gather(
+    /// The diffuse cones per block (and over frames), before the trace upsamples them; `time`
+    /// says which frame of the history this is. Nothing when the trace does not gather.
+    pub fn record_gather(
         &self,
         ctx: &Context,
         g: &mut Graph,
-        gather: &Gather,
         scene_set: vk::DescriptorSet,
         time: &TraceFrame,
         name: &str,
     ) {
+        let Some(gather) = &self.gather else {
+            return;
+        };
         let d = &ctx.device;
         let instance = if gather.histories.is_empty() {
             0
@@ -393,11 +396,10 @@ impl Trace {
         let e = gather.gathered.desc.extent;
         let blocks = (e.width, e.height);
         let p = &gather.pass;
-        p.declare(g.pass(&format!("{name} gather")), instance)
-            .record(|cmd| unsafe {
-                p.bind(d, cmd, &[(0, scene_set)], instance);
-                p.pipeline.push(d, cmd, &push);
-                d.cmd_dispatch(cmd, blocks.0.div_ceil(8), blocks.1.div_ceil(8), 1);
-            });
+        p.declare(g.pass(name), instance).record(|cmd| unsafe {
+            p.bind(d, cmd, &[(0, scene_set)], instance);
+            p.pipeline.push(d, cmd, &push);
+            d.cmd_dispatch(cmd, blocks.0.div_ceil(8), blocks.1.div_ceil(8), 1);
+        });
     }
 }

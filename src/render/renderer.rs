@@ -106,6 +106,9 @@ pub enum Step {
     GBuffer,
     /// Direct light per pixel from the G-buffer and the shadow maps.
     Lighting,
+    /// The diffuse cones per block of pixels or over frames (with a trace scale above 1 or a
+    /// temporal trace), for the trace to upsample.
+    Gather,
     /// Cones per pixel, added to the direct light (the modes that shade pixels).
     Trace,
     /// The first voxel along each camera ray (the voxel modes).
@@ -121,6 +124,7 @@ impl Step {
             Step::Voxels(s) => s.name(),
             Step::GBuffer => "gbuffer".into(),
             Step::Lighting => "lighting".into(),
+            Step::Gather => "gather".into(),
             Step::Trace => "trace".into(),
             Step::VoxelView => "voxel view".into(),
             Step::Readback => "readback".into(),
@@ -449,12 +453,15 @@ impl Renderer {
         if matches!(mode, Mode::Full | Mode::Direct) {
             steps.push(Step::Lighting);
         }
-        if self.gi.is_some() {
-            steps.push(if mode.shades_pixels() {
-                Step::Trace
+        if let Some(gi) = &self.gi {
+            if mode.shades_pixels() {
+                if gi.trace.gathers() {
+                    steps.push(Step::Gather);
+                }
+                steps.push(Step::Trace);
             } else {
-                Step::VoxelView
-            });
+                steps.push(Step::VoxelView);
+            }
         }
         if readback {
             steps.push(Step::Readback);
@@ -510,6 +517,7 @@ impl Renderer {
                 let scene_set = self.sets.scene_set();
                 self.lighting.record(ctx, g, &name, targets, scene_set)
             }
+            Step::Gather => self.record_gather(g, &name),
             Step::Trace | Step::VoxelView => self.record_trace(g, &name),
             Step::Readback => targets.record_readback(ctx, g, &name),
         }
@@ -558,20 +566,22 @@ impl Renderer {
             Mode::Direct => unreachable!("direct mode has no voxel passes"),
         };
         let size = (self.targets.width, self.targets.height);
+        gi.trace
+            .record(&self.ctx, g, self.sets.scene_set(), size, trace_mode, name);
+    }
+
+    /// The diffuse cones per block or over frames, before the trace.
+    fn record_gather(&self, g: &mut Graph, name: &str) {
+        let Some(gi) = &self.gi else {
+            return;
+        };
         let time = TraceFrame {
             prev_view_proj: self.prev_view_proj,
             index: self.history_frames,
             reset: self.history_reset,
         };
-        gi.trace.record(
-            &self.ctx,
-            g,
-            self.sets.scene_set(),
-            size,
-            trace_mode,
-            &time,
-            name,
-        );
+        gi.trace
+            .record_gather(&self.ctx, g, self.sets.scene_set(), &time, name);
     }
 
     /// The next frame traces the diffuse cones afresh, without the temporal history: a camera
