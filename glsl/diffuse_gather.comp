@@ -5,12 +5,13 @@
 // cone_trace.comp (UPSAMPLED) spreads each block's result over the pixels that show the same
 // surface. Writes per block: irradiance (rgb) and occlusion (a), each over the whole cone set;
 // and the specular cone's radiance where it is wide enough to be smooth (rough surfaces).
-// TEMPORAL: each frame traces one of `subsets` interleaved subsets of the cone set (cones
-// k, k + subsets, ...; k = frame mod subsets) and adds it to the block's history, taken from
-// where its surface was in the frame before. Irradiance does not depend on the view, so the
-// history stays right while the camera moves: it is dropped only where the surface was not
-// seen (disocclusion, a cut) or when the light in the voxels changed (`reset`). A block whose
-// history holds every cone traces none.
+// TEMPORAL: a block keeps a history of its cones, taken each frame from where its surface was
+// in the frame before. Irradiance does not depend on the view, so the history stays right
+// while the camera moves. A block whose history holds every cone traces none; one whose
+// surface was not seen before (a disocclusion) traces one of `subsets` interleaved subsets of
+// the cone set per frame (cones k, k + subsets, ...; k = frame mod subsets) and has them all
+// after `subsets` frames. When the light in the voxels changed, or on a cut (`reset`), every
+// block traces the whole set at once: that frame is a full one, as without a history.
 #include "common.glsl"
 #include "voxel_common.glsl"
 #define CONE_SET 2
@@ -128,8 +129,12 @@ void main() {
     vec4 sums;
     float weight;
     reproject(p, n, sums, weight);
-    // Complete once the sums hold the whole set's weight (to rounding).
-    if (weight < whole * (1.0 - 1e-4)) {
+    if (pass.reset != 0u) {
+        Gather g = diffuse_cones(origin, frame_n, t0, 0u, 1u);
+        sums = vec4(g.irradiance, g.occlusion);
+        weight = g.weight;
+    } else if (weight < whole * (1.0 - 1e-4)) {
+        // Complete once the sums hold the whole set's weight (to rounding).
         uint subsets = max(pass.subsets, 1u);
         Gather g = diffuse_cones(origin, frame_n, t0, pass.frame_index % subsets, subsets);
         sums += vec4(g.irradiance, g.occlusion);
