@@ -44,12 +44,13 @@ struct Upsampled {
     vec4 specular;   // a 0: no block traced a wide specular cone on it
 };
 
-// The cones of the pixel at p (normal n) from the four blocks around it, each weighted
-// bilinearly by where its traced pixel (the one nearest the block's centre) lies, and only if
-// that pixel shows the same surface: its position within a quarter voxel of p's tangent plane
-// and eight voxels of p, its normal within 25 degrees (within 11 for the specular cone, whose
-// direction turns twice as fast).
-Upsampled upsample(ivec2 px, vec3 p, vec3 n) {
+// The cones of the pixel at p from the four blocks around it, each weighted bilinearly by
+// where its traced pixel (the one nearest the block's centre) lies, and only if that pixel
+// shows the same surface: its position within a quarter voxel of p's plane and eight voxels of
+// p, its geometric normal within 25 degrees of p's, `geo` (within 11 for the specular cone,
+// whose direction turns twice as fast). Geometric normals, not shading ones: a normal map
+// would part every pixel from its neighbours (its detail is lost to the blocks' cones).
+Upsampled upsample(ivec2 px, vec3 p, vec3 geo) {
     int s = int(pass.scale);
     ivec2 blocks = textureSize(gathered, 0);
     ivec2 size = ivec2(frame.counts.yz);
@@ -67,10 +68,10 @@ Upsampled upsample(ivec2 px, vec3 p, vec3 n) {
         ivec2 traced = min(c * s + s / 2, size - 1);
         vec4 pk = texelFetch(gb_position, traced, 0);
         if (pk.a == 0.0) continue;
-        vec3 nk = oct_decode(texelFetch(gb_normals, traced, 0).xy);
+        vec3 nk = oct_decode(texelFetch(gb_normals, traced, 0).zw);
         vec3 d = pk.xyz - p;
-        float facing = dot(n, nk);
-        if (abs(dot(d, n)) > 0.25 * vs || dot(d, d) > 64.0 * vs * vs || facing < 0.9) continue;
+        float facing = dot(geo, nk);
+        if (abs(dot(d, geo)) > 0.25 * vs || dot(d, d) > 64.0 * vs * vs || facing < 0.9) continue;
         // A floor under the bilinear weight keeps a block that holds the surface when the
         // nearer ones do not.
         vec2 wb = mix(1.0 - f, f, vec2(o));
@@ -118,12 +119,21 @@ void main() {
     float t0;
     vec3 origin = cone_start(p, n, geo, t0);
 
-#ifdef UPSAMPLED
-    Upsampled up = upsample(px, p, n);
-    Gather g = up.diffuse;
-    if (g.weight == 0.0) g = diffuse_cones(origin, frame_n, t0, 0u, 1u);
-#else
+#ifdef PAPER
     Gather g = diffuse_cones(origin, frame_n, t0, 0u, 1u);
+#else
+    // A metal reflects no diffuse light: the full image needs no diffuse cones there.
+    bool diffuse = pass.mode != 0u || albedo.a < 1.0;
+    Gather g = Gather(vec3(0.0), 0.0, PI);
+#ifdef UPSAMPLED
+    Upsampled up = upsample(px, p, geo);
+    if (diffuse) {
+        g = up.diffuse;
+        if (g.weight == 0.0) g = diffuse_cones(origin, frame_n, t0, 0u, 1u);
+    }
+#else
+    if (diffuse) g = diffuse_cones(origin, frame_n, t0, 0u, 1u);
+#endif
 #endif
     vec3 irradiance = g.irradiance;
     float ao = clamp(1.0 - g.occlusion / PI, 0.0, 1.0);

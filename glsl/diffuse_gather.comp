@@ -30,7 +30,7 @@ layout(set = 1, binding = 10, rgba16f) uniform writeonly image2D gathered_specul
 #ifdef TEMPORAL
 // Per block, the frame before's (in) and this frame's (out): the cones' sums (irradiance rgb,
 // occlusion a), where the block's surface lies (xyz) with the weight of the cones summed (w:
-// 0 is no history), and its normal (octahedral, xy).
+// 0 is no history), and its geometric normal (octahedral, xy).
 layout(set = 1, binding = 3, rgba32f) uniform readonly image2D history_in;
 layout(set = 1, binding = 4, rgba32f) uniform readonly image2D history_place_in;
 layout(set = 1, binding = 5, rgba16f) uniform readonly image2D history_normal_in;
@@ -48,11 +48,11 @@ layout(push_constant) uniform Pass {
 } pass;
 
 #ifdef TEMPORAL
-// The history at world point p (normal n): the frame before's blocks around where p was seen,
-// bilinearly weighted, those that held the same surface only (as cone_trace.comp's upsampling
-// tests it). Sums and weight are both interpolated, so their ratio stays an estimate of the
+// The history at world point p (geometric normal geo): the frame before's blocks around where
+// p was seen, bilinearly weighted, those that held the same surface only (as cone_trace.comp's
+// upsampling tests it). Sums and weight are both interpolated, so their ratio stays an estimate of the
 // whole set.
-void reproject(vec3 p, vec3 n, out vec4 sums, out float weight) {
+void reproject(vec3 p, vec3 geo, out vec4 sums, out float weight) {
     sums = vec4(0.0);
     weight = 0.0;
     if (pass.reset != 0u) return;
@@ -80,7 +80,7 @@ void reproject(vec3 p, vec3 n, out vec4 sums, out float weight) {
         if (place.w <= 0.0) continue;
         vec3 nk = oct_decode(imageLoad(history_normal_in, c).xy);
         vec3 d = place.xyz - p;
-        if (abs(dot(d, n)) > 0.25 * vs || dot(d, d) > 4.0 * vs * vs || dot(n, nk) < 0.9) continue;
+        if (abs(dot(d, geo)) > 0.25 * vs || dot(d, d) > 4.0 * vs * vs || dot(geo, nk) < 0.9) continue;
         sums += w * imageLoad(history_in, c);
         weight += w * place.w;
         wsum += w;
@@ -128,7 +128,7 @@ void main() {
 #ifdef TEMPORAL
     vec4 sums;
     float weight;
-    reproject(p, n, sums, weight);
+    reproject(p, geo, sums, weight);
     if (pass.reset != 0u) {
         Gather g = diffuse_cones(origin, frame_n, t0, 0u, 1u);
         sums = vec4(g.irradiance, g.occlusion);
@@ -142,7 +142,7 @@ void main() {
     }
     imageStore(history_out, q, sums);
     imageStore(history_place_out, q, vec4(p, weight));
-    imageStore(history_normal_out, q, vec4(normals.xy, 0.0, 0.0));
+    imageStore(history_normal_out, q, vec4(normals.zw, 0.0, 0.0));
     imageStore(gathered, q, weight > 0.0 ? sums * (whole / weight) : vec4(0.0));
 #else
     Gather g = diffuse_cones(origin, frame_n, t0, 0u, 1u);

@@ -112,11 +112,12 @@ struct GiOpts {
     #[arg(long, alias = "no-emitter-lights")]
     no_area_lights: bool,
     /// Trace the diffuse cones once per block of S x S pixels (1, 2 or 4) and upsample them by
-    /// position and normal (default 1; not with --paper)
+    /// position and normal (default 4; not with --paper)
     #[arg(long, value_name = "S", value_parser = trace_scale, conflicts_with = "paper")]
     trace_scale: Option<u32>,
-    /// Trace the diffuse cones over N frames, a share per frame, from a reprojected history
-    /// (0: all of them every frame; default 0; not with --paper)
+    /// Keep the diffuse cones over frames, in a history reprojected from the frame before;
+    /// surfaces a moving camera uncovers trace every N-th cone a frame (0: every cone every
+    /// frame; default 4; not with --paper)
     #[arg(long, value_name = "N", conflicts_with = "paper",
           value_parser = clap::value_parser!(u32).range(0..=16))]
     temporal: Option<u32>,
@@ -236,8 +237,7 @@ struct RenderCmd {
     /// .exr: linear radiance (RGB float); .png: display image
     #[arg(long, default_value = "voxgi.png")]
     out: PathBuf,
-    /// Frames to render (timings are medians over them; default 1, 5 with --timings; at least
-    /// N with --temporal N, which traces the whole cone set over N frames)
+    /// Frames to render (timings are medians over them; default 1, 5 with --timings)
     #[arg(long, value_name = "N")]
     frames: Option<u32>,
     /// The moving scene (animations, --spin) as it is T seconds in
@@ -592,13 +592,7 @@ fn render(c: RenderCmd) -> Result<()> {
     }
     let (mut settings, mut scene, motion) = c.show.load()?;
     let (width, height, timings) = (settings.width, settings.height, settings.timings);
-    // A temporal trace shows the whole cone set from its N-th frame on.
-    let temporal = settings.gi.temporal;
-    let frames = c
-        .frames
-        .unwrap_or(if timings { 5 } else { 1 })
-        .max(temporal)
-        .max(1);
+    let frames = c.frames.unwrap_or(if timings { 5 } else { 1 }).max(1);
     let time = c.time.unwrap_or(0.0);
     if !time.is_finite() || time < 0.0 {
         bail!("--time {time} must be a finite number of seconds, 0 or more");

@@ -256,10 +256,6 @@ impl Env {
         r.camera = camera.clone();
         r.render(false)?;
         before(&mut r)?;
-        // A temporal trace shows its whole cone set from the N-th frame after a change.
-        for _ in 1..gi.temporal {
-            r.render(false)?;
-        }
         r.render(true)?;
         let img = RadianceImage {
             width: self.size,
