@@ -1,5 +1,6 @@
 //! Step 4: cone tracing per pixel (indirect diffuse, specular, ambient occlusion) added to the
-//! direct light, and the debug views of the volumes.
+//! direct light, and the debug views of the volumes. The diffuse cones may be traced per block
+//! of pixels and kept over frames first (the gather pass), for the trace to upsample.
 
 use super::bounce::cone_volumes;
 use super::inject::{read_voxel_data, variant};
@@ -47,8 +48,9 @@ pub struct FrameImages<'a> {
 }
 
 /// Where the diffuse cones are traced: `scale` (1, 2 or 4) pixels per side of each block that
-/// traces them once (1: every pixel), and with `temporal` N > 0, a subset of them per frame,
-/// completed over N frames from a reprojected history (glsl/diffuse_gather.comp).
+/// traces them once (1: every pixel), and with `temporal` N > 0, kept in a history reprojected
+/// from frame to frame, what a moving camera uncovers traced a subset per frame over N frames
+/// (glsl/diffuse_gather.comp).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TraceLayout {
     pub scale: u32,
