@@ -129,7 +129,17 @@ void main() {
     Upsampled up = upsample(px, p, geo);
     if (diffuse) {
         g = up.diffuse;
-        if (g.weight == 0.0) g = diffuse_cones(origin, frame_n, t0, 0u, 1u);
+        if (g.weight == 0.0) {
+            // No block shows this surface (a thin or edge-on one): every other cone, scaled to
+            // the whole set. Such a pixel costs the neighbours sharing its SIMD lanes as much,
+            // and the whole set there was most of the pass on EmissiveStrengthTest (395 ms of
+            // the trace's 395 at 256x256; 240 with half the cones; a quarter of them missed the
+            // thin pole's bound in tests/fast_frames.rs).
+            g = diffuse_cones(origin, frame_n, t0, 0u, 2u);
+            float whole = cone_set_weight();
+            g.irradiance *= whole / g.weight;
+            g.occlusion *= whole / g.weight;
+        }
     }
 #else
     if (diffuse) g = diffuse_cones(origin, frame_n, t0, 0u, 1u);
