@@ -137,8 +137,8 @@ pub struct Row {
     pub passes: Vec<(String, Spread)>,
     /// Submission to fence per frame after the lights moved (shadows, voxels and trace run).
     pub frame: Spread,
-    /// Submission to fence per still frame (G-buffer, direct light and trace; with a temporal
-    /// trace, once its history is complete).
+    /// Submission to fence per still frame (G-buffer, direct light and trace; a temporal trace
+    /// traces no cones there).
     pub still: Spread,
     /// Submission to fence per frame of the moving camera.
     pub moving: Spread,
@@ -146,7 +146,7 @@ pub struct Row {
     pub metrics: Metrics,
     /// The error of the moving camera's last frame, back where it started.
     pub moving_metrics: Metrics,
-    /// The error of the first frame after the lights moved (a temporal trace's worst).
+    /// The error of the first frame after the lights moved.
     pub relit_metrics: Metrics,
     /// How long the path tracer takes to reach the still frame's relMSE (None: not within
     /// the samples tried, see [`PtPoint`]).
@@ -434,14 +434,11 @@ fn measure(
         height: opts.height,
         pixels: r.radiance(),
     };
-    // The first frame after the lights moved, as shown: a temporal trace starts over there.
+    // The first frame after the lights moved, as shown.
     r.relight();
     r.render(true).map_err(|e| e.to_string())?;
     let relit_image = image(&r);
-    // Still frames: a temporal trace completes its cone set over the first ones.
-    for _ in 0..setting.gi.temporal {
-        r.render(false).map_err(|e| e.to_string())?;
-    }
+    // Still frames (a temporal trace keeps its blocks' cones: it traces none).
     r.frame_ms.clear();
     for _ in 0..opts.frames {
         r.render(false).map_err(|e| e.to_string())?;

@@ -278,10 +278,10 @@ pub fn markdown(res: &BenchResults) -> String {
     let _ = writeln!(
         out,
         "- time: median (min to max) over {} frame{} after {} warm-up frame{}, submission to \
-         fence (wall clock). still: a still frame (G-buffer, direct light, trace; with \
-         --temporal N, after the N frames that complete its history); relit: a frame after \
-         the lights moved (shadow maps, voxel lighting and bounces run; a temporal trace \
-         starts over); moving: the camera swung about the scene's vertical axis by up to {} \
+         fence (wall clock). still: a still frame (G-buffer, direct light, trace; a \
+         temporal trace keeps its blocks' cones); relit: a frame after the lights moved \
+         (shadow maps, voxel lighting and bounces run; a temporal trace traces every block's \
+         cones again); moving: the camera swung about the scene's vertical axis by up to {} \
          degrees and back over {} frames, its error at the last (the start again). GPU \
          passes: timestamps of the relit frames (on lavapipe they can miss \
          compute work: trust the wall time there)",
