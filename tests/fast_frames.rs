@@ -135,44 +135,19 @@ fn frames(
     between: impl FnOnce(&mut Renderer),
     after: u32,
 ) -> RadianceImage {
-    let ctx = context();
-    let stats = ctx.stats.clone();
-    let (w, h, pixels) = {
-        let mut r = Renderer::new(&ctx, scene, settings).expect("renderer");
+    let img = render_with(scene, settings, |r| {
         for _ in 0..frames {
             r.render(false).expect("frame");
         }
-        between(&mut r);
+        between(r);
         for _ in 0..after {
             r.render(false).expect("frame");
         }
         r.render(true).expect("frame");
-        (r.settings.width, r.settings.height, r.radiance())
-    };
-    drop(ctx);
-    assert_eq!(
-        stats.count(),
-        0,
-        "validation messages:\n{}",
-        stats.messages().join("\n")
-    );
-    let img = RadianceImage {
-        width: w,
-        height: h,
-        pixels,
-    };
+    });
     assert!(!img.has_non_finite(), "non-finite pixels");
-    // VOXGI_TEST_DUMP=dir keeps the images for a look.
-    if let Ok(dir) = std::env::var("VOXGI_TEST_DUMP") {
-        let n = DUMPED.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let name = std::thread::current().name().unwrap_or("test").to_string();
-        let path = std::path::Path::new(&dir).join(format!("{name}-{n}.exr"));
-        voxgi::output::save(&img, &path, 0.0).expect("dump");
-    }
     img
 }
-
-static DUMPED: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
 
 fn rel_mse(a: &RadianceImage, b: &RadianceImage) -> f64 {
     metrics::try_compare(a, b, 0.0).expect("same size").rel_mse

@@ -142,26 +142,13 @@ impl Gather {
     ) -> VkResult<(Image, Image, Vec<History>)> {
         let (w, h) = frame.size;
         let (bw, bh) = (w.div_ceil(layout.scale), h.div_ceil(layout.scale));
-        let gathered = Image::new(
-            ctx,
-            "trace gathered",
-            ImageDesc::d2(
-                vk::Format::R32G32B32A32_SFLOAT,
-                bw,
-                bh,
-                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED,
-            ),
-        )?;
-        let specular = Image::new(
-            ctx,
-            "trace gathered specular",
-            ImageDesc::d2(
-                vk::Format::R16G16B16A16_SFLOAT,
-                bw,
-                bh,
-                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED,
-            ),
-        )?;
+        // Written by the gather, sampled by the trace.
+        let per_block = |name: &str, format| {
+            let usage = vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED;
+            Image::new(ctx, name, ImageDesc::d2(format, bw, bh, usage))
+        };
+        let gathered = per_block("trace gathered", vk::Format::R32G32B32A32_SFLOAT)?;
+        let specular = per_block("trace gathered specular", vk::Format::R16G16B16A16_SFLOAT)?;
         let histories = if layout.temporal > 0 {
             (0..2)
                 .map(|k| History::new(ctx, bw, bh, k))

@@ -167,13 +167,22 @@ pub fn light(kind: LightKind, radiance: Vec3, position: Vec3, direction: Vec3) -
 
 /// Renders under validation; fails the test on any validation message or leak.
 pub fn render(scene: &Scene, settings: RenderSettings) -> RadianceImage {
+    render_with(scene, settings, |r| r.render(true).expect("frame"))
+}
+
+/// Renders under validation, `frames` driving the renderer (its frames and what changes
+/// between them; the last must read back); fails the test on any validation message or leak.
+pub fn render_with(
+    scene: &Scene,
+    settings: RenderSettings,
+    frames: impl FnOnce(&mut Renderer),
+) -> RadianceImage {
     let ctx = context();
     let stats = ctx.stats.clone();
-    let (w, h) = (settings.width, settings.height);
-    let pixels = {
+    let (w, h, pixels) = {
         let mut r = Renderer::new(&ctx, scene, settings).expect("renderer");
-        r.render(true).expect("frame");
-        r.radiance()
+        frames(&mut r);
+        (r.settings.width, r.settings.height, r.radiance())
     };
     drop(ctx);
     assert_eq!(
