@@ -142,6 +142,64 @@ pub fn light_table(
     }
 }
 
+/// The scene's textures (then a 1x1 white one, bound wherever a material has none): their
+/// images, the copies of their mip levels from the staging data, and their samplers.
+struct SceneTextures {
+    textures: Vec<Image>,
+    /// Per texture: one copy per mip level.
+    regions: Vec<Vec<vk::BufferImageCopy>>,
+    /// Per texture: its sampler's index in `samplers`.
+    texture_samplers: Vec<usize>,
+    samplers: Vec<Sampler>,
+}
+
+/// Makes the textures' images and stages their mip chains with `stage` (which returns each
+/// chunk's offset in the staging data).
+fn scene_textures(
+    ctx: &Arc<Context>,
+    scene: &Scene,
+    stage: &mut impl FnMut(&[u8]) -> u64,
+) -> VkResult<SceneTextures> {
+    let white = white_texture();
+    let tex_list: Vec<&Texture> = scene.textures.iter().chain([&white]).collect();
+    let mut out = SceneTextures {
+        textures: Vec::new(),
+        regions: Vec::new(),
+        texture_samplers: Vec::new(),
+        samplers: Vec::new(),
+    };
+    let mut sampler_keys: HashMap<(i32, i32, bool, bool), usize> = HashMap::new();
+    for (i, t) in tex_list.iter().enumerate() {
+        let chain = mip_chain(t);
+        let format = if t.srgb {
+            vk::Format::R8G8B8A8_SRGB
+        } else {
+            vk::Format::R8G8B8A8_UNORM
+        };
+        let img = Image::new(
+            ctx,
+            &format!("texture {i} {}", t.name),
+            ImageDesc::d2(
+                format,
+                t.width,
+                t.height,
+                vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
+            )
+            .mips(chain.len() as u32),
+        )?;
+        let r = chain
+            .iter()
+            .enumerate()
+            .map(|(level, (w, h, data))| mip_copy(stage(data), level as u32, *w, *h))
+            .collect();
+        out.regions.push(r);
+        out.textures.push(img);
+        let sampler = sampler_for(ctx, t, &mut sampler_keys, &mut out.samplers)?;
+        out.texture_samplers.push(sampler);
+    }
+    Ok(out)
+}
+
 impl GpuScene {
     /// The 1x1 white texture (the last one).
     pub fn white(&self) -> usize {
@@ -353,40 +411,12 @@ impl GpuScene {
         );
         let light_buffers = LightBuffers::new(ctx, &table)?;
 
-        // Textures, then a 1x1 white one bound wherever a material has no texture.
-        let white = white_texture();
-        let tex_list: Vec<&Texture> = scene.textures.iter().chain([&white]).collect();
-        let mut textures = Vec::new();
-        let mut regions: Vec<Vec<vk::BufferImageCopy>> = Vec::new();
-        let mut sampler_keys: HashMap<(i32, i32, bool, bool), usize> = HashMap::new();
-        let mut samplers = Vec::new();
-        let mut texture_samplers = Vec::new();
-        for (i, t) in tex_list.iter().enumerate() {
-            let chain = mip_chain(t);
-            let format = if t.srgb {
-                vk::Format::R8G8B8A8_SRGB
-            } else {
-                vk::Format::R8G8B8A8_UNORM
-            };
-            let img = Image::new(
-                ctx,
-                &format!("texture {i} {}", t.name),
-                ImageDesc::d2(
-                    format,
-                    t.width,
-                    t.height,
-                    vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_DST,
-                )
-                .mips(chain.len() as u32),
-            )?;
-            let mut r = Vec::new();
-            for (level, (w, h, data)) in chain.iter().enumerate() {
-                r.push(mip_copy(stage(data), level as u32, *w, *h));
-            }
-            regions.push(r);
-            textures.push(img);
-            texture_samplers.push(sampler_for(ctx, t, &mut sampler_keys, &mut samplers)?);
-        }
+        let SceneTextures {
+            textures,
+            regions,
+            texture_samplers,
+            samplers,
+        } = scene_textures(ctx, scene, &mut stage)?;
 
         let mut staging = Buffer::new(
             ctx,
