@@ -89,19 +89,15 @@ unsafe fn copy_level(
         img.raw,
         vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
         host.raw,
-        &[vk::BufferImageCopy::default()
-            .buffer_offset(offset)
-            .image_subresource(vk::ImageSubresourceLayers {
-                aspect_mask: vk::ImageAspectFlags::COLOR,
-                mip_level: level,
-                base_array_layer: 0,
-                layer_count: 1,
-            })
-            .image_extent(vk::Extent3D {
+        &[crate::vk::level_copy(
+            offset,
+            level,
+            vk::Extent3D {
                 width: side,
                 height: side,
                 depth: side,
-            })],
+            },
+        )],
     )
 }
 

@@ -104,18 +104,12 @@ impl FrameTargets {
             .image(&self.hdr, Access::TransferRead)
             .buffer(&self.readback, Access::TransferWrite)
             .record(|cmd| unsafe {
-                let region = vk::BufferImageCopy::default()
-                    .image_subresource(vk::ImageSubresourceLayers {
-                        aspect_mask: vk::ImageAspectFlags::COLOR,
-                        mip_level: 0,
-                        base_array_layer: 0,
-                        layer_count: 1,
-                    })
-                    .image_extent(vk::Extent3D {
-                        width: w,
-                        height: h,
-                        depth: 1,
-                    });
+                let extent = vk::Extent3D {
+                    width: w,
+                    height: h,
+                    depth: 1,
+                };
+                let region = crate::vk::level_copy(0, 0, extent);
                 ctx.device.cmd_copy_image_to_buffer(
                     cmd,
                     self.hdr.raw,

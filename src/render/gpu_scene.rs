@@ -298,19 +298,12 @@ fn white_texture() -> Texture {
 
 /// The copy of one mip level from the staging buffer at `offset`.
 fn mip_copy(offset: u64, level: u32, width: u32, height: u32) -> vk::BufferImageCopy {
-    vk::BufferImageCopy::default()
-        .buffer_offset(offset)
-        .image_subresource(vk::ImageSubresourceLayers {
-            aspect_mask: vk::ImageAspectFlags::COLOR,
-            mip_level: level,
-            base_array_layer: 0,
-            layer_count: 1,
-        })
-        .image_extent(vk::Extent3D {
-            width,
-            height,
-            depth: 1,
-        })
+    let extent = vk::Extent3D {
+        width,
+        height,
+        depth: 1,
+    };
+    crate::vk::level_copy(offset, level, extent)
 }
 
 /// The sampler of a texture's wrap and filter modes: one per distinct set, made on first use.

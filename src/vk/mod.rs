@@ -14,7 +14,7 @@ pub use context::{Context, ContextDesc, DeviceInfo, MessageStats};
 pub use graph::{Access, Graph, ResourceStates, Tracked};
 pub use pass::{AddressTable, Bindings, Pass, Program, SharedSet, Usage};
 pub use pipeline::{GraphicsDesc, Pipeline, VertexLayout};
-pub use resources::{Buffer, Image, ImageDesc, Sampler};
+pub use resources::{level_copy, Buffer, Image, ImageDesc, Sampler};
 pub use timing::PassTimer;
 
 pub use ash::vk;

@@ -364,3 +364,17 @@ impl Drop for Sampler {
         unsafe { self.ctx.device.destroy_sampler(self.raw, None) };
     }
 }
+
+/// The copy between a buffer at `offset` and one mip level of a colour image's first layer,
+/// `extent` texels of it (depth 1 for 2D images).
+pub fn level_copy(offset: u64, level: u32, extent: vk::Extent3D) -> vk::BufferImageCopy {
+    vk::BufferImageCopy::default()
+        .buffer_offset(offset)
+        .image_subresource(vk::ImageSubresourceLayers {
+            aspect_mask: vk::ImageAspectFlags::COLOR,
+            mip_level: level,
+            base_array_layer: 0,
+            layer_count: 1,
+        })
+        .image_extent(extent)
+}
