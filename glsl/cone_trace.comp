@@ -1,5 +1,5 @@
 #version 450
-// variants: PAPER UPSAMPLED
+// variants: PAPER UPSAMPLED UNMATCHED
 // Cone tracing per pixel, step 4 of the paper (its light_pass): indirect diffuse from a set of
 // cones over the normal's hemisphere, a specular cone along the reflection whose aperture
 // follows roughness, and ambient occlusion; added to the direct light already in `radiance_out`.
@@ -8,7 +8,11 @@
 // (direct + indirect) x AO + emission, as the original composes it (without its gamma mix-up).
 // UPSAMPLED: the diffuse cones were traced at reduced resolution (diffuse_gather.comp); each
 // pixel takes them from the blocks around it that hold its own surface (a joint bilateral
-// upsampling guided by position and normal), and traces them itself where none does.
+// upsampling guided by position and normal). A pixel no block holds (a thin or edge-on
+// surface) is listed instead, and UNMATCHED traces the listed pixels' diffuse cones in a
+// dispatch of their own: traced in place, each such pixel held up the SIMD lanes beside it for
+// its whole cone set (on EmissiveStrengthTest's edge-on panels, 120 of the trace's 250 ms at
+// 256x256 for about 1% of its pixels).
 #include "common.glsl"
 #include "voxel_common.glsl"
 #define CONE_SET 2
@@ -17,7 +21,11 @@
 #include "brdf.glsl"
 #include "lights.glsl"
 
+#ifdef UNMATCHED
+layout(local_size_x = 64) in;
+#else
 layout(local_size_x = 8, local_size_y = 8) in;
+#endif
 
 layout(set = 1, binding = 0) uniform sampler2D gb_position;
 layout(set = 1, binding = 1) uniform sampler2D gb_normals;
@@ -28,9 +36,25 @@ layout(set = 1, binding = 5, rgba32f) uniform image2D radiance_out;
 
 #ifdef UPSAMPLED
 // Per block of scale x scale pixels (diffuse_gather.comp): irradiance and occlusion; the
-// specular cone's radiance where it is wide (a 1) or none (a 0).
+// specular cone's radiance and the tangent of its half angle (a), or none (a 0).
 layout(set = 1, binding = 6) uniform sampler2D gathered;
 layout(set = 1, binding = 7) uniform sampler2D gathered_specular;
+#endif
+
+#if defined(UPSAMPLED) || defined(UNMATCHED)
+// Groups per row of UNMATCHED's dispatch (maxComputeWorkGroupCount may be 65535 per axis).
+const uint ROW = 4096u;
+// The pixels no block holds, listed by UPSAMPLED for UNMATCHED (its indirect dispatch: groups
+// of 64 in rows of ROW).
+#ifdef UNMATCHED
+layout(set = 1, binding = 8, std430) readonly buffer Unmatched {
+#else
+layout(set = 1, binding = 8, std430) buffer Unmatched {
+#endif
+    uint dispatch_x, dispatch_y, dispatch_z;
+    uint count;
+    uint pixels[];  // x | y << 16
+};
 #endif
 
 layout(push_constant) uniform Pass {
@@ -41,16 +65,17 @@ layout(push_constant) uniform Pass {
 #ifdef UPSAMPLED
 struct Upsampled {
     Gather diffuse;  // weight 0: no block holds the pixel's surface
-    vec4 specular;   // a 0: no block traced a wide specular cone on it
+    vec4 specular;   // a 0: no block traced a specular cone close enough to the pixel's
 };
 
 // The cones of the pixel at p from the four blocks around it, each weighted bilinearly by
 // where its traced pixel (the one nearest the block's centre) lies, and only if that pixel
 // shows the same surface: its position within a quarter voxel of p's plane and eight voxels of
-// p, its geometric normal within 25 degrees of p's, `geo` (within 11 for the specular cone,
-// whose direction turns twice as fast). Geometric normals, not shading ones: a normal map
-// would part every pixel from its neighbours (its detail is lost to the blocks' cones).
-Upsampled upsample(ivec2 px, vec3 p, vec3 geo) {
+// p, its geometric normal within 25 degrees of p's, `geo`. Geometric normals, not shading ones:
+// a normal map would part every pixel from its neighbours (its detail is lost to the blocks'
+// cones). A block's specular cone is taken where it has the pixel's aperture (`tan_half`, to
+// a tenth) and its reflection lies within SPECULAR_TURN of the half angle of the pixel's, `refl`.
+Upsampled upsample(ivec2 px, vec3 p, vec3 geo, vec3 refl, float tan_half) {
     int s = int(pass.scale);
     ivec2 blocks = textureSize(gathered, 0);
     ivec2 size = ivec2(frame.counts.yz);
@@ -61,6 +86,7 @@ Upsampled upsample(ivec2 px, vec3 p, vec3 geo) {
     vec4 sum = vec4(0.0);
     vec4 spec = vec4(0.0);
     float wsum = 0.0;
+    float turn_cos = cos(SPECULAR_TURN * atan(tan_half));
     for (int k = 0; k < 4; k++) {
         ivec2 o = ivec2(k & 1, k >> 1);
         ivec2 c = b + o;
@@ -68,7 +94,8 @@ Upsampled upsample(ivec2 px, vec3 p, vec3 geo) {
         ivec2 traced = min(c * s + s / 2, size - 1);
         vec4 pk = texelFetch(gb_position, traced, 0);
         if (pk.a == 0.0) continue;
-        vec3 nk = oct_decode(texelFetch(gb_normals, traced, 0).zw);
+        vec4 normals_k = texelFetch(gb_normals, traced, 0);
+        vec3 nk = oct_decode(normals_k.zw);
         vec3 d = pk.xyz - p;
         float facing = dot(geo, nk);
         if (abs(dot(d, geo)) > 0.25 * vs || dot(d, d) > 64.0 * vs * vs || facing < 0.9) continue;
@@ -79,7 +106,10 @@ Upsampled upsample(ivec2 px, vec3 p, vec3 geo) {
         sum += w * texelFetch(gathered, c, 0);
         wsum += w;
         vec4 sk = texelFetch(gathered_specular, c, 0);
-        if (sk.a > 0.0 && facing > 0.98) spec += w * vec4(sk.rgb, 1.0);
+        if (sk.a > 0.0 && abs(sk.a - tan_half) <= 0.1 * tan_half) {
+            vec3 rk = reflect(normalize(pk.xyz - frame.eye.xyz), oct_decode(normals_k.xy));
+            if (dot(rk, refl) >= turn_cos) spec += w * vec4(sk.rgb, 1.0);
+        }
     }
     Upsampled r;
     r.diffuse = wsum > 0.0 ? Gather(sum.rgb / wsum, sum.a / wsum, PI) : Gather(vec3(0.0), 0.0, 0.0);
@@ -96,6 +126,49 @@ vec2 env_brdf(float roughness, float n_dot_v) {
     float a004 = min(r.x * r.x, exp2(-9.28 * n_dot_v)) * r.x + r.y;
     return vec2(-1.04, 1.04) * a004 + r.zw;
 }
+
+// What a surface reflects of the light the cones bring: the share of the irradiance its
+// diffuse lobe sends to the eye (albedo / pi, less what the specular lobe takes), and the
+// specular lobe's reflectance by the split sum (of the specular cone's radiance).
+void reflectances(vec4 albedo, float roughness, vec4 spec, float n_dot_v,
+                  out vec3 diffuse_weight, out vec3 spec_reflectance) {
+    vec3 base = albedo.rgb;
+    float metallic = albedo.a;
+    vec3 f0 = mix(min(vec3(0.04) * spec.rgb, vec3(1.0)) * spec.a, base, metallic);
+    vec3 f90 = vec3(mix(spec.a, 1.0, metallic));
+    vec2 ab = env_brdf(roughness, n_dot_v);
+    spec_reflectance = f0 * ab.x + f90 * ab.y;
+    diffuse_weight = (1.0 - metallic) * (1.0 - spec_reflectance) * base / PI;
+}
+
+#ifdef UNMATCHED
+// A listed pixel's diffuse cones, the whole set, added to what the trace left (it took no
+// diffuse light there); the ambient occlusion mode's value replaced.
+void main() {
+    uint i = (gl_WorkGroupID.y * ROW + gl_WorkGroupID.x) * 64u + gl_LocalInvocationID.x;
+    if (i >= min(count, uint(pixels.length()))) return;
+    ivec2 px = ivec2(pixels[i] & 0xffffu, pixels[i] >> 16);
+    vec4 normals = texelFetch(gb_normals, px, 0);
+    vec3 p = texelFetch(gb_position, px, 0).xyz;
+    vec3 n = oct_decode(normals.xy);
+    vec3 v = normalize(frame.eye.xyz - p);
+    float t0;
+    vec3 origin = cone_start(p, n, oct_decode(normals.zw), t0);
+    Gather g = diffuse_cones(origin, tangent_frame(n), t0, 0u, 1u);
+    vec4 radiance = imageLoad(radiance_out, px);
+    if (pass.mode == 2u) {
+        radiance.rgb = vec3(clamp(1.0 - g.occlusion / PI, 0.0, 1.0));
+    } else {
+        vec3 diffuse_weight;
+        vec3 spec_reflectance;
+        reflectances(texelFetch(gb_albedo, px, 0), texelFetch(gb_emission, px, 0).a,
+                     texelFetch(gb_specular, px, 0), clamp(dot(n, v), 1e-4, 1.0),
+                     diffuse_weight, spec_reflectance);
+        radiance.rgb += diffuse_weight * g.irradiance;
+    }
+    imageStore(radiance_out, px, radiance);
+}
+#else
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -119,26 +192,36 @@ void main() {
     float t0;
     vec3 origin = cone_start(p, n, geo, t0);
 
+    vec3 base = albedo.rgb;
+    float metallic = albedo.a;
+    float roughness = emission.a;
+    float n_dot_v = clamp(dot(n, v), 1e-4, 1.0);
+    vec3 diffuse_weight;
+    vec3 spec_reflectance;
+    reflectances(albedo, roughness, spec, n_dot_v, diffuse_weight, spec_reflectance);
+
 #ifdef PAPER
     Gather g = diffuse_cones(origin, frame_n, t0, 0u, 1u);
 #else
-    // A metal reflects no diffuse light: the full image needs no diffuse cones there.
-    bool diffuse = pass.mode != 0u || albedo.a < 1.0;
+    // A surface that reflects no diffuse light (a metal, black) needs no diffuse cones in the
+    // full image.
+    bool diffuse = pass.mode != 0u || max(diffuse_weight.r, max(diffuse_weight.g, diffuse_weight.b)) > 0.0;
     Gather g = Gather(vec3(0.0), 0.0, PI);
 #ifdef UPSAMPLED
-    Upsampled up = upsample(px, p, geo);
+    Upsampled up = upsample(px, p, geo, reflect(-v, n), specular_aperture(roughness));
     if (diffuse) {
         g = up.diffuse;
         if (g.weight == 0.0) {
-            // No block shows this surface (a thin or edge-on one): every other cone, scaled to
-            // the whole set. Such a pixel costs the neighbours sharing its SIMD lanes as much,
-            // and the whole set there was most of the pass on EmissiveStrengthTest (395 ms of
-            // the trace's 395 at 256x256; 240 with half the cones; a quarter of them missed the
-            // thin pole's bound in tests/fast_frames.rs).
-            g = diffuse_cones(origin, frame_n, t0, 0u, 2u);
-            float whole = cone_set_weight();
-            g.irradiance *= whole / g.weight;
-            g.occlusion *= whole / g.weight;
+            // No block shows this surface: UNMATCHED adds its diffuse light.
+            uint i = atomicAdd(count, 1u);
+            if (i < uint(pixels.length())) {
+                pixels[i] = uint(px.x) | (uint(px.y) << 16);
+                if (i % 64u == 0u) {
+                    uint groups = i / 64u + 1u;
+                    atomicMax(dispatch_x, min(groups, ROW));
+                    atomicMax(dispatch_y, (groups + ROW - 1u) / ROW);
+                }
+            }
         }
     }
 #else
@@ -148,20 +231,12 @@ void main() {
     vec3 irradiance = g.irradiance;
     float ao = clamp(1.0 - g.occlusion / PI, 0.0, 1.0);
 
-    vec3 base = albedo.rgb;
-    float metallic = albedo.a;
-    float roughness = emission.a;
-    float n_dot_v = clamp(dot(n, v), 1e-4, 1.0);
     vec3 specular = vec3(0.0);
-    vec3 f0 = mix(min(vec3(0.04) * spec.rgb, vec3(1.0)) * spec.a, base, metallic);
-    vec3 f90 = vec3(mix(spec.a, 1.0, metallic));
-    vec2 ab = env_brdf(roughness, n_dot_v);
-    vec3 spec_reflectance = f0 * ab.x + f90 * ab.y;
     if (frame.trace.z > 0.0 && max(spec_reflectance.r, max(spec_reflectance.g, spec_reflectance.b)) > 1e-4) {
         float tan_half = specular_aperture(roughness);
         vec4 seen = vec4(0.0);
 #ifdef UPSAMPLED
-        if (tan_half >= WIDE_SPECULAR) seen = up.specular;
+        seen = up.specular;
 #endif
         if (seen.a == 0.0) seen.rgb = trace_cone(origin, reflect(-v, n), tan_half, t0, max_dist).radiance;
         specular = seen.rgb * spec_reflectance;
@@ -188,10 +263,10 @@ void main() {
     vec3 indirect = 2.0 * (base * irradiance + specular);
     vec3 full = (direct.rgb - emission.rgb + indirect) * ao + emission.rgb;
 #else
-    vec3 diffuse_weight = (1.0 - metallic) * (1.0 - spec_reflectance) * base / PI;
     vec3 indirect = diffuse_weight * irradiance + specular;
     vec3 full = direct.rgb + indirect;
 #endif
     vec3 result = pass.mode == 0u ? full : (pass.mode == 1u ? indirect : vec3(ao));
     imageStore(radiance_out, px, vec4(result, 1.0));
 }
+#endif

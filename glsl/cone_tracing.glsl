@@ -253,9 +253,13 @@ float specular_aperture(float roughness) {
 #endif
 }
 
-// A specular cone at least this wide (tangent of its half angle; 53 degrees across) sees a
-// smooth blur of the scene, which the reduced-resolution trace can trace per block too.
-const float WIDE_SPECULAR = 0.5;
+// The reduced-resolution trace traces the specular cone per block too where it is at least this
+// wide (tangent of its half angle; 11 degrees across, roughness above about 0.28), and a pixel
+// takes a block's only where the block's reflection is within SPECULAR_TURN of the cone's half
+// angle of its own: the cone then sees nearly the same blur of the scene. Narrower cones
+// would seldom be shared: a block pixel's reflection turns with the view and the normal.
+const float SHARED_SPECULAR = 0.1;
+const float SPECULAR_TURN = 0.25;
 
 // The whole set's weight.
 float cone_set_weight() {

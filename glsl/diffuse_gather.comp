@@ -23,8 +23,9 @@ layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 1, binding = 0) uniform sampler2D gb_position;
 layout(set = 1, binding = 1) uniform sampler2D gb_normals;
 layout(set = 1, binding = 2, rgba32f) uniform writeonly image2D gathered;
-// The specular cone where it is wide (WIDE_SPECULAR): its radiance (rgb), a 1; else a 0. It
-// depends on the view, so it is traced every frame and kept in no history.
+// The specular cone where it is wide enough to share (SHARED_SPECULAR): its radiance (rgb) and
+// the tangent of its half angle (a); else a 0. It depends on the view, so it is traced every
+// frame and kept in no history.
 layout(set = 1, binding = 9) uniform sampler2D gb_emission;
 layout(set = 1, binding = 10, rgba16f) uniform writeonly image2D gathered_specular;
 #ifdef TEMPORAL
@@ -120,9 +121,9 @@ void main() {
 
     float tan_half = specular_aperture(texelFetch(gb_emission, px, 0).a);
     vec4 specular = vec4(0.0);
-    if (frame.trace.z > 0.0 && tan_half >= WIDE_SPECULAR) {
+    if (frame.trace.z > 0.0 && tan_half >= SHARED_SPECULAR) {
         vec3 r = reflect(normalize(p - frame.eye.xyz), n);
-        specular = vec4(trace_cone(origin, r, tan_half, t0, frame.cone.z * frame.grid.w).radiance, 1.0);
+        specular = vec4(trace_cone(origin, r, tan_half, t0, frame.cone.z * frame.grid.w).radiance, tan_half);
     }
     imageStore(gathered_specular, q, specular);
 #ifdef TEMPORAL

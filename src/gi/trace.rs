@@ -1,15 +1,17 @@
 //! Step 4: cone tracing per pixel (indirect diffuse, specular, ambient occlusion) added to the
 //! direct light, and the debug views of the volumes. The diffuse cones may be traced per block
-//! of pixels and kept over frames first (the gather pass), for the trace to upsample.
+//! of pixels and kept over frames first (the gather pass), for the trace to upsample; the
+//! pixels no block holds then get theirs in a pass of their own (the unmatched pass).
 
 use super::bounce::cone_volumes;
 use super::inject::{read_voxel_data, variant};
 use super::volumes::Volumes;
 use crate::vk::{
-    vk, Bindings, Context, Graph, Image, ImageDesc, Pass, ResourceStates, SharedSet, Usage,
-    VkResult,
+    vk, Access, Bindings, Buffer, Context, Graph, Image, ImageDesc, Pass, ResourceStates,
+    SharedSet, Usage, VkResult,
 };
 use glam::Mat4;
+use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
 /// What the trace pass writes.
@@ -76,12 +78,8 @@ pub struct TraceFrame {
     pub reset: bool,
 }
 
-/// The trace's table: the frame's images and the volumes cones sample.
-fn trace_table(
-    volumes: &Volumes,
-    frame: &FrameImages,
-    gathered: Option<(&Image, &Image)>,
-) -> Bindings {
+/// The frame's images and the volumes cones sample: what the trace and the unmatched pass read.
+fn frame_table(volumes: &Volumes, frame: &FrameImages) -> Bindings {
     let table = frame
         .gbuffer
         .iter()
@@ -89,15 +87,33 @@ fn trace_table(
         .fold(Bindings::new(), |t, (img, name)| {
             t.sampled_with(name, img, frame.sampler)
         })
-        .image("radiance_out", frame.out, Usage::ReadWrite)
-        .with(gathered, |t, (g, s)| {
-            t.sampled_with("gathered", g, frame.sampler).sampled_with(
-                "gathered_specular",
-                s,
-                frame.sampler,
-            )
-        });
+        .image("radiance_out", frame.out, Usage::ReadWrite);
     cone_volumes(table, volumes, true)
+}
+
+/// The trace's table: the frame's, and what the gather left with the list of pixels no block
+/// holds.
+fn trace_table(volumes: &Volumes, frame: &FrameImages, gather: Option<&Gather>) -> Bindings {
+    frame_table(volumes, frame).with(gather, |t, g| {
+        t.sampled_with("gathered", &g.gathered, frame.sampler)
+            .sampled_with("gathered_specular", &g.specular, frame.sampler)
+            .buffer("Unmatched", &g.unmatched, Usage::ReadWrite)
+    })
+}
+
+/// The list of pixels no block holds (glsl/cone_trace.comp: an indirect dispatch's arguments,
+/// a count, then up to one entry per pixel).
+fn unmatched_list(ctx: &Arc<Context>, frame: &FrameImages) -> VkResult<Buffer> {
+    let (w, h) = frame.size;
+    Buffer::new(
+        ctx,
+        "trace unmatched pixels",
+        16 + 4 * u64::from(w) * u64::from(h),
+        vk::BufferUsageFlags::STORAGE_BUFFER
+            | vk::BufferUsageFlags::INDIRECT_BUFFER
+            | vk::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuOnly,
+    )
 }
 
 /// The history of the temporal gather: its sums, their places and normals (one frame's).
@@ -126,12 +142,15 @@ impl History {
 }
 
 /// The diffuse cones at reduced resolution or over frames: the per-block results and, when
-/// temporal, two histories that frames read and write in turn.
+/// temporal, two histories that frames read and write in turn; and for the pixels no block
+/// holds, their list and the pass that traces them.
 struct Gather {
     pass: Pass,
     gathered: Image,
     specular: Image,
     histories: Vec<History>,
+    unmatched: Buffer,
+    unmatched_pass: Pass,
 }
 
 impl Gather {
@@ -213,12 +232,26 @@ impl Gather {
             Gather::tables(volumes, frame, &gathered, &specular, &histories),
             GATHER_PUSH_SIZE,
         )?;
+        let unmatched = unmatched_list(ctx, frame)?;
+        let unmatched_pass = Pass::compute(
+            ctx,
+            "cone_trace.comp:UNMATCHED",
+            &[scene],
+            Gather::unmatched_table(volumes, frame, &unmatched),
+            TRACE_PUSH_SIZE,
+        )?;
         Ok(Gather {
             pass,
             gathered,
             specular,
             histories,
+            unmatched,
+            unmatched_pass,
         })
+    }
+
+    fn unmatched_table(volumes: &Volumes, frame: &FrameImages, list: &Buffer) -> Bindings {
+        frame_table(volumes, frame).buffer("Unmatched", list, Usage::Indirect)
     }
 }
 
@@ -261,11 +294,7 @@ impl Trace {
             ctx,
             &shader,
             &[scene],
-            trace_table(
-                volumes,
-                frame,
-                gather.as_ref().map(|g| (&g.gathered, &g.specular)),
-            ),
+            trace_table(volumes, frame, gather.as_ref()),
             TRACE_PUSH_SIZE,
         )?;
         let view = Pass::compute(
@@ -301,18 +330,26 @@ impl Trace {
             for img in old.chain([&g.gathered, &g.specular]) {
                 states.forget(img.raw);
             }
+            states.forget(g.unmatched.raw);
             let (gathered, specular, histories) = Gather::images(ctx, frame, self.layout)?;
             let tables = Gather::tables(volumes, frame, &gathered, &specular, &histories);
             for (k, t) in tables.into_iter().enumerate() {
                 g.pass.rebind(ctx, k, t, &[scene])?;
             }
+            let unmatched = unmatched_list(ctx, frame)?;
+            let table = Gather::unmatched_table(volumes, frame, &unmatched);
+            g.unmatched_pass.rebind(ctx, 0, table, &[scene])?;
             g.gathered = gathered;
             g.specular = specular;
             g.histories = histories;
+            g.unmatched = unmatched;
         }
-        let gathered = self.gather.as_ref().map(|g| (&g.gathered, &g.specular));
-        self.trace
-            .rebind(ctx, 0, trace_table(volumes, frame, gathered), &[scene])?;
+        self.trace.rebind(
+            ctx,
+            0,
+            trace_table(volumes, frame, self.gather.as_ref()),
+            &[scene],
+        )?;
         self.view
             .rebind(ctx, 0, view_table(volumes, frame.out), &[scene])
     }
@@ -323,7 +360,8 @@ impl Trace {
         self.gather.is_some()
     }
 
-    /// Cones per pixel (`mode` below 10), or a view of the voxels.
+    /// Cones per pixel (`mode` below 10), or a view of the voxels. After a gather, the list of
+    /// pixels no block holds is emptied first (under the same name).
     pub fn record(
         &self,
         ctx: &Context,
@@ -338,13 +376,56 @@ impl Trace {
         let (p, push) = if debug {
             (&self.view, vec![mode as u32 - 10])
         } else {
-            (&self.trace, vec![mode as u32, self.layout.scale.max(1)])
+            (&self.trace, self.trace_push(mode))
         };
+        if let (false, Some(gather)) = (debug, &self.gather) {
+            g.pass(name)
+                .buffer(&gather.unmatched, Access::TransferWrite)
+                .record(|cmd| unsafe {
+                    // Dispatch (0, 1, 1), count 0.
+                    let args: Vec<u8> = [0u32, 1, 1, 0]
+                        .iter()
+                        .flat_map(|w| w.to_le_bytes())
+                        .collect();
+                    d.cmd_update_buffer(cmd, gather.unmatched.raw, 0, &args);
+                });
+        }
         let bytes: Vec<u8> = push.iter().flat_map(|v| v.to_le_bytes()).collect();
         p.declare(g.pass(name), 0).record(|cmd| unsafe {
             p.bind(d, cmd, &[(0, scene_set)], 0);
             p.pipeline.push(d, cmd, &bytes);
             d.cmd_dispatch(cmd, size.0.div_ceil(8), size.1.div_ceil(8), 1);
+        });
+    }
+
+    fn trace_push(&self, mode: TraceMode) -> Vec<u32> {
+        vec![mode as u32, self.layout.scale.max(1)]
+    }
+
+    /// The diffuse cones of the pixels the trace listed (no block holds them), added to its
+    /// image. Nothing when the trace does not gather.
+    pub fn record_unmatched(
+        &self,
+        ctx: &Context,
+        g: &mut Graph,
+        scene_set: vk::DescriptorSet,
+        mode: TraceMode,
+        name: &str,
+    ) {
+        let Some(gather) = &self.gather else {
+            return;
+        };
+        let d = &ctx.device;
+        let bytes: Vec<u8> = self
+            .trace_push(mode)
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
+        let p = &gather.unmatched_pass;
+        p.declare(g.pass(name), 0).record(|cmd| unsafe {
+            p.bind(d, cmd, &[(0, scene_set)], 0);
+            p.pipeline.push(d, cmd, &bytes);
+            d.cmd_dispatch_indirect(cmd, gather.unmatched.raw, 0);
         });
     }
 

@@ -111,6 +111,8 @@ pub enum Step {
     Gather,
     /// Cones per pixel, added to the direct light (the modes that shade pixels).
     Trace,
+    /// After a gather: the diffuse cones of the pixels no block holds, which the trace listed.
+    TraceUnmatched,
     /// The first voxel along each camera ray (the voxel modes).
     VoxelView,
     /// The radiance image copied to host memory.
@@ -126,6 +128,7 @@ impl Step {
             Step::Lighting => "lighting".into(),
             Step::Gather => "gather".into(),
             Step::Trace => "trace".into(),
+            Step::TraceUnmatched => "trace unmatched".into(),
             Step::VoxelView => "voxel view".into(),
             Step::Readback => "readback".into(),
         }
@@ -459,6 +462,9 @@ impl Renderer {
                     steps.push(Step::Gather);
                 }
                 steps.push(Step::Trace);
+                if gi.trace.gathers() {
+                    steps.push(Step::TraceUnmatched);
+                }
             } else {
                 steps.push(Step::VoxelView);
             }
@@ -519,6 +525,7 @@ impl Renderer {
             }
             Step::Gather => self.record_gather(g, &name),
             Step::Trace | Step::VoxelView => self.record_trace(g, &name),
+            Step::TraceUnmatched => self.record_trace_unmatched(g, &name),
             Step::Readback => targets.record_readback(ctx, g, &name),
         }
     }
@@ -554,7 +561,30 @@ impl Renderer {
         let Some(gi) = &self.gi else {
             return;
         };
-        let trace_mode = match self.settings.mode {
+        let size = (self.targets.width, self.targets.height);
+        gi.trace.record(
+            &self.ctx,
+            g,
+            self.sets.scene_set(),
+            size,
+            self.trace_mode(),
+            name,
+        );
+    }
+
+    /// The pixels the trace left to a pass of their own.
+    fn record_trace_unmatched(&self, g: &mut Graph, name: &str) {
+        let Some(gi) = &self.gi else {
+            return;
+        };
+        let mode = self.trace_mode();
+        gi.trace
+            .record_unmatched(&self.ctx, g, self.sets.scene_set(), mode, name);
+    }
+
+    /// What the trace pass writes in the renderer's mode.
+    fn trace_mode(&self) -> TraceMode {
+        match self.settings.mode {
             Mode::Full => TraceMode::Full,
             Mode::Indirect => TraceMode::Indirect,
             Mode::Ao => TraceMode::Ao,
@@ -564,10 +594,7 @@ impl Renderer {
             Mode::VoxelsRadiance if self.settings.mip.is_some() => TraceMode::Directional,
             Mode::VoxelsRadiance => TraceMode::VoxelRadiance,
             Mode::Direct => unreachable!("direct mode has no voxel passes"),
-        };
-        let size = (self.targets.width, self.targets.height);
-        gi.trace
-            .record(&self.ctx, g, self.sets.scene_set(), size, trace_mode, name);
+        }
     }
 
     /// The diffuse cones per block or over frames, before the trace.
