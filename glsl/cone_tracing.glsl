@@ -119,6 +119,10 @@ vec4 sample_cone(vec3 uvw, vec3 dir, float diameter, vec3 from) {
 #endif
 #else
     float level = cone_level(diameter);
+#if CONE_FULL_RES
+    // Level 0 is the full-resolution voxels alone: the directional volumes would weigh 0.
+    if (level == 0.0) return full_res_seen(uvw, dir, from);
+#endif
     vec4 s = sample_directional(uvw, dir, max(level - 1.0, 0.0), from, true);
 #if CONE_FULL_RES
     if (level < 1.0) s = mix(full_res_seen(uvw, dir, from), s, level);
