@@ -119,48 +119,72 @@ vec3 edge_term(vec3 a, vec3 b) {
     return s > 0.0 ? c * (atan(s, dot(a, b)) / s) : vec3(0.0);
 }
 
-// The sum of edge terms' z of the polygon's corners taken to `local` (relative to p), clipped
-// to z >= 0: minus 2 pi times the clamped-cosine form factor of a polygon whose front faces p.
-// The clip walks the outline once: an edge leaving the upper side ends at the horizon, and the
-// horizon's arc to where the outline comes back closes it (in any order: arcs along the
-// horizon add up).
-float clipped_edge_sum(Outline o, vec3 p, mat3 local) {
-    uint n = o.count;
-    vec3 first = local * (outline_corner(o, 0u) - p);
-    vec3 a = first;
-    float sum = 0.0;
-    vec3 exit_point = vec3(0.0);
-    vec3 first_entry = vec3(0.0);
-    bool exited = false;
-    bool entered_first = false;
-    for (uint k = 0u; k < n; k++) {
-        vec3 b = k + 1u == n ? first : local * (outline_corner(o, k + 1u) - p);
-        bool a_up = a.z >= 0.0;
-        bool b_up = b.z >= 0.0;
-        if (a_up && b_up) {
-            sum += edge_term(a, b).z;
-        } else if (a_up != b_up) {
-            vec3 x = mix(a, b, a.z / (a.z - b.z));
-            x.z = 0.0;
-            if (a_up) {
-                sum += edge_term(a, x).z;
-                exit_point = x;
-                exited = true;
+// Lambert's sum clipped to the horizon z >= 0 of a lobe's frame, built an edge at a time as the
+// outline's corners come (relative to the shaded point, in that frame): an edge leaving the
+// upper side ends at the horizon, and the horizon's arc to where the outline comes back
+// closes it (in any order: arcs along the horizon add up).
+struct Clip {
+    vec3 first;        // the first corner
+    vec3 a;            // the last corner
+    float sum;         // edge terms' z so far
+    vec3 exit_point;   // where the outline last went under the horizon
+    vec3 first_entry;  // where it first came up, if it started under
+    bool exited;
+    bool entered_first;
+};
+
+Clip clip_begin(vec3 first) {
+    return Clip(first, first, 0.0, vec3(0.0), vec3(0.0), false, false);
+}
+
+// The edge from the last corner to b.
+void clip_edge(inout Clip c, vec3 b) {
+    vec3 a = c.a;
+    bool a_up = a.z >= 0.0;
+    bool b_up = b.z >= 0.0;
+    if (a_up && b_up) {
+        c.sum += edge_term(a, b).z;
+    } else if (a_up != b_up) {
+        vec3 x = mix(a, b, a.z / (a.z - b.z));
+        x.z = 0.0;
+        if (a_up) {
+            c.sum += edge_term(a, x).z;
+            c.exit_point = x;
+            c.exited = true;
+        } else {
+            if (c.exited) {
+                c.sum += edge_term(c.exit_point, x).z;
+                c.exited = false;
             } else {
-                if (exited) {
-                    sum += edge_term(exit_point, x).z;
-                    exited = false;
-                } else {
-                    first_entry = x;
-                    entered_first = true;
-                }
-                sum += edge_term(x, b).z;
+                c.first_entry = x;
+                c.entered_first = true;
             }
+            c.sum += edge_term(x, b).z;
         }
-        a = b;
     }
-    if (exited && entered_first) sum += edge_term(exit_point, first_entry).z;
-    return sum;
+    c.a = b;
+}
+
+// Closes the outline: minus 2 pi times the clamped-cosine form factor of a polygon whose front
+// faces the point.
+float clip_end(inout Clip c) {
+    clip_edge(c, c.first);
+    if (c.exited && c.entered_first) c.sum += edge_term(c.exit_point, c.first_entry).z;
+    return c.sum;
+}
+
+// The clipped sums of the polygon's corners taken to two lobes' frames at once (each corner
+// read and placed once): `local_a` and `local_b` map world offsets from p to them.
+vec2 clipped_edge_sums(Outline o, vec3 p, mat3 local_a, mat3 local_b) {
+    vec3 d = outline_corner(o, 0u) - p;
+    Clip a = clip_begin(local_a * d);
+    Clip b = clip_begin(local_b * d);
+    for (uint k = 1u; k < o.count; k++) {
+        d = outline_corner(o, k) - p;
+        clip_edge(a, local_a * d);
+        clip_edge(b, local_b * d);
+    }
+    return vec2(clip_end(a), clip_end(b));
 }
 
 // The shading frame's rows: x the tangent towards v, y the bitangent, z the normal.
@@ -172,22 +196,23 @@ mat3 area_frame(vec3 n, vec3 v) {
     return transpose(mat3(t, b, n));
 }
 
-// The form factor of one area light's polygons from p for a surface of normal n (0 to 1; pi
-// Le times it is the irradiance), with `local` the map from world offsets to the frame whose
-// z is the lobe's axis (area_frame, or the LTC's inverse matrix times it).
-float area_form_factor(Light light, vec3 p, mat3 local) {
+// The form factors of one area light's polygons from p for two lobes (0 to 1; pi Le times one
+// is the irradiance the lobe gathers), with `local_a` and `local_b` the maps from world
+// offsets to the frames whose z are the lobes' axes (area_frame for the diffuse lobe, the
+// LTC's inverse matrix times it for the specular one).
+vec2 area_form_factors(Light light, vec3 p, mat3 local_a, mat3 local_b) {
     uint first = uint(light.cone.x);
     uint count = uint(light.cone.y);
     bool two_sided = light.radiance.w > 0.5;
-    float f = 0.0;
+    vec2 f = vec2(0.0);
     for (uint i = 0u; i < count; i++) {
         AreaPolygon poly = area_polygons[first + i];
         float side = area_side(poly, p);
         if (side == 0.0 || (side < 0.0 && !two_sided)) continue;
         // A front face turns clockwise around the lobe's axis seen from p: negative sums.
-        f += -side * clipped_edge_sum(area_outline(poly, p), p, local);
+        f += -side * clipped_edge_sums(area_outline(poly, p), p, local_a, local_b);
     }
-    return max(f, 0.0) / (2.0 * PI);
+    return max(f, vec2(0.0)) / (2.0 * PI);
 }
 
 // Whether p lies within `reach` of a polygon (inside a sphere's, or within reach of its
@@ -250,15 +275,10 @@ vec3 area_light_radiance(Light light, Surface s, vec3 p, vec3 n, vec3 v) {
     vec3 f90 = vec3(mix(s.specular, 1.0, s.metallic));
     Ltc ltc = ltc_lookup(s.roughness, n_dot_v);
     vec3 reflectance = f0 * (ltc.albedo - ltc.schlick) + f90 * ltc.schlick;
-    vec3 result = vec3(0.0);
-    if (s.metallic < 1.0) {
-        float diffuse = area_form_factor(light, p, local);
-        result += (1.0 - s.metallic) * (1.0 - reflectance) * s.base_color * diffuse;
-    }
-    if (max(reflectance.r, max(reflectance.g, reflectance.b)) > 0.0) {
-        result += reflectance * area_form_factor(light, p, ltc.inverse * local);
-    }
-    return light.radiance.rgb * result;
+    // Both lobes in one walk over the outlines (a lobe a surface lacks weighs 0).
+    vec2 f = area_form_factors(light, p, local, ltc.inverse * local);
+    vec3 diffuse = (1.0 - s.metallic) * (1.0 - reflectance) * s.base_color;
+    return light.radiance.rgb * (diffuse * f.x + reflectance * f.y);
 }
 #endif
 
