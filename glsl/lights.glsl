@@ -64,6 +64,32 @@ uint cube_face(vec3 d) {
     return d.z >= 0.0 ? 4u : 5u;
 }
 
+// The mean of a (2r + 1)^2 grid of bilinear depth comparisons a texel apart around uv, read as
+// (r + 1)^2 gathers of 2x2 comparisons: the grid weighs the 2r + 2 texels along each axis
+// 1 - f, 1, ..., 1, f (f: uv's place between texel centres), so each gather's four texels
+// take the products of those weights. Half the reads or fewer, the same mean.
+float pcf_grid(sampler2DArrayShadow map, vec2 uv, float layer, float depth, int r) {
+    float res = frame.shadow.x;
+    vec2 st = uv * res - 0.5;
+    vec2 base = floor(st);
+    vec2 f = st - base;
+    int last = 2 * r + 1;
+    float sum = 0.0;
+    for (int j = 0; j <= r; j++) {
+        for (int i = 0; i <= r; i++) {
+            ivec2 k = ivec2(2 * i, 2 * j);
+            // Texels base - r + k and the next ones; the gather at the corner they share.
+            vec2 corner = base - float(r) + vec2(k);
+            vec4 g = textureGather(map, vec3((corner + 1.0) / res, layer), depth);
+            vec2 w0 = mix(vec2(1.0), 1.0 - f, vec2(equal(k, ivec2(0))));
+            vec2 w1 = mix(vec2(1.0), f, vec2(equal(k + 1, ivec2(last))));
+            // Gather order: (0, 1), (1, 1), (1, 0), (0, 0).
+            sum += g.x * w0.x * w1.y + g.y * w1.x * w1.y + g.z * w1.x * w0.y + g.w * w0.x * w0.y;
+        }
+    }
+    return sum / float(last * last);
+}
+
 // Fraction of the light that reaches p (1 = lit), by percentage-closer filtering of the light's
 // shadow map. The lookup point moves along the geometric normal by about a texel so that a
 // surface does not shadow itself (acne) without detaching shadows from their casters.
@@ -88,18 +114,7 @@ float shadow_visibility(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow sh
     if (!shadow_coords(sv, q, uv, depth)) return 1.0;
     if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return 1.0;
 
-    float res = frame.shadow.x;
-    int radius = int(frame.shadow.z);
-    float sum = 0.0;
-    float n = 0.0;
-    for (int y = -radius; y <= radius; y++) {
-        for (int x = -radius; x <= radius; x++) {
-            vec2 o = vec2(x, y) / res;
-            sum += texture(shadow_map, vec4(uv + o, float(view), depth));
-            n += 1.0;
-        }
-    }
-    return sum / n;
+    return pcf_grid(shadow_map, uv, float(view), depth, int(frame.shadow.z));
 }
 
 // Tap i of n spread evenly over the unit disc (Vogel's spiral: golden-angle turns, radii by
