@@ -162,16 +162,7 @@ impl Bounce {
 
     /// Clears the list's count and dispatch arguments.
     pub fn record_list_clear(&self, ctx: &Context, g: &mut Graph, name: &str) {
-        g.pass(name)
-            .buffer(&self.list, Access::TransferWrite)
-            .record(|cmd| unsafe {
-                // Dispatch (0, 1, 1), count 0.
-                let args: Vec<u8> = [0u32, 1, 1, 0]
-                    .iter()
-                    .flat_map(|w| w.to_le_bytes())
-                    .collect();
-                ctx.device.cmd_update_buffer(cmd, self.list.raw, 0, &args);
-            });
+        super::record_list_clear(ctx, g, &self.list, name);
     }
 
     /// Lists the filled voxels (the list holds until the voxels change: static ones once,

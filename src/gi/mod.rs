@@ -15,7 +15,7 @@ pub use volumes::{VolumeInfo, Volumes};
 
 use crate::scene::Aabb;
 use crate::vk::{
-    vk, Buffer, Context, Graph, Image, Pipeline, Sampler, SharedSet, VertexLayout, VkResult,
+    vk, Access, Buffer, Context, Graph, Image, Pipeline, Sampler, SharedSet, VertexLayout, VkResult,
 };
 use glam::{Vec3, Vec4};
 use std::sync::Arc;
@@ -321,6 +321,20 @@ pub const FIELDS: &[Field] = &[
         set: |g, v| g.temporal = v as u32,
     },
 ];
+
+/// Empties a list that drives an indirect dispatch (the bounce's filled voxels, the trace's
+/// unmatched pixels): its header, dispatch (0, 1, 1) and count 0.
+pub(crate) fn record_list_clear(ctx: &Context, g: &mut Graph, list: &Buffer, name: &str) {
+    g.pass(name)
+        .buffer(list, Access::TransferWrite)
+        .record(|cmd| unsafe {
+            let args: Vec<u8> = [0u32, 1, 1, 0]
+                .iter()
+                .flat_map(|w| w.to_le_bytes())
+                .collect();
+            ctx.device.cmd_update_buffer(cmd, list.raw, 0, &args);
+        });
+}
 
 /// What the RGBA16F radiance volumes are scaled by: 1, unless the brightest voxel could come
 /// near the half float's largest value (65504), e.g. a 1e6 W/sr light. The bound: a white voxel

@@ -7,8 +7,8 @@ use super::bounce::cone_volumes;
 use super::inject::{read_voxel_data, variant};
 use super::volumes::Volumes;
 use crate::vk::{
-    vk, Access, Bindings, Buffer, Context, Graph, Image, ImageDesc, Pass, ResourceStates,
-    SharedSet, Usage, VkResult,
+    vk, Bindings, Buffer, Context, Graph, Image, ImageDesc, Pass, ResourceStates, SharedSet, Usage,
+    VkResult,
 };
 use glam::Mat4;
 use gpu_allocator::MemoryLocation;
@@ -379,16 +379,7 @@ impl Trace {
             (&self.trace, self.trace_push(mode))
         };
         if let (false, Some(gather)) = (debug, &self.gather) {
-            g.pass(name)
-                .buffer(&gather.unmatched, Access::TransferWrite)
-                .record(|cmd| unsafe {
-                    // Dispatch (0, 1, 1), count 0.
-                    let args: Vec<u8> = [0u32, 1, 1, 0]
-                        .iter()
-                        .flat_map(|w| w.to_le_bytes())
-                        .collect();
-                    d.cmd_update_buffer(cmd, gather.unmatched.raw, 0, &args);
-                });
+            super::record_list_clear(ctx, g, &gather.unmatched, name);
         }
         let bytes: Vec<u8> = push.iter().flat_map(|v| v.to_le_bytes()).collect();
         p.declare(g.pass(name), 0).record(|cmd| unsafe {
