@@ -373,15 +373,14 @@ impl Trace {
     ) {
         let d = &ctx.device;
         let debug = (mode as u32) >= 10;
-        let (p, push) = if debug {
-            (&self.view, vec![mode as u32 - 10])
+        let (p, bytes) = if debug {
+            (&self.view, (mode as u32 - 10).to_le_bytes().to_vec())
         } else {
             (&self.trace, self.trace_push(mode))
         };
         if let (false, Some(gather)) = (debug, &self.gather) {
             super::record_list_clear(ctx, g, &gather.unmatched, name);
         }
-        let bytes: Vec<u8> = push.iter().flat_map(|v| v.to_le_bytes()).collect();
         p.declare(g.pass(name), 0).record(|cmd| unsafe {
             p.bind(d, cmd, &[(0, scene_set)], 0);
             p.pipeline.push(d, cmd, &bytes);
@@ -389,8 +388,12 @@ impl Trace {
         });
     }
 
-    fn trace_push(&self, mode: TraceMode) -> Vec<u32> {
-        vec![mode as u32, self.layout.scale.max(1)]
+    /// The trace's push constants (and the unmatched pass's): mode, scale.
+    fn trace_push(&self, mode: TraceMode) -> Vec<u8> {
+        [mode as u32, self.layout.scale.max(1)]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect()
     }
 
     /// The diffuse cones of the pixels the trace listed (no block holds them), added to its
@@ -407,11 +410,7 @@ impl Trace {
             return;
         };
         let d = &ctx.device;
-        let bytes: Vec<u8> = self
-            .trace_push(mode)
-            .iter()
-            .flat_map(|v| v.to_le_bytes())
-            .collect();
+        let bytes = self.trace_push(mode);
         let p = &gather.unmatched_pass;
         p.declare(g.pass(name), 0).record(|cmd| unsafe {
             p.bind(d, cmd, &[(0, scene_set)], 0);
