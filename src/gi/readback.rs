@@ -31,6 +31,22 @@ pub struct VoxelDump {
 }
 
 impl VoxelDump {
+    /// An empty grid of side n, nothing lit: what the decoders fill.
+    fn empty(n: u32) -> VoxelDump {
+        let nv = (n as usize).pow(3);
+        VoxelDump {
+            resolution: n,
+            filled: vec![false; nv],
+            count: vec![0; nv],
+            albedo: vec![Vec3::ZERO; nv],
+            normal: vec![Vec3::ZERO; nv],
+            emission: vec![Vec3::ZERO; nv],
+            radiance: None,
+            directional: None,
+            small_emission: None,
+        }
+    }
+
     pub fn index(&self, x: u32, y: u32, z: u32) -> usize {
         let n = self.resolution as usize;
         x as usize + n * (y as usize + n * z as usize)
@@ -171,14 +187,30 @@ impl Gi {
         ctx: &Arc<Context>,
         states: &mut ResourceStates,
     ) -> VkResult<VoxelDump> {
-        let n = self.volumes.grid.resolution;
-        let voxels = (n as u64).pow(3);
-        // Sources: a buffer, or one mip level of an image (bytes per texel, level, side), in a
-        // fixed order.
-        enum Src<'a> {
-            Buf(&'a Buffer),
-            Img(&'a Image, u64, u32, u32),
-        }
+        let (sources, directional_names) = self.readback_sources();
+        let (host, ranges) = copy_to_host(ctx, states, &sources)?;
+        let bytes = host.mapped().expect("readback is host-visible");
+        let parts: Parts = sources
+            .iter()
+            .zip(&ranges)
+            .map(|((name, _), &(offset, size))| {
+                (
+                    name.as_str(),
+                    &bytes[offset as usize..(offset + size) as usize],
+                )
+            })
+            .collect();
+        let mut dump = VoxelDump::empty(self.volumes.grid.resolution);
+        self.decode_sums(&parts, &mut dump);
+        decode_paper(&parts, &mut dump);
+        self.decode_lit(&parts, &directional_names, &mut dump);
+        Ok(dump)
+    }
+
+    /// What the readback copies, by name, in a fixed order: the accumulation buffers (static
+    /// and dynamic sums, or --paper's RGBA8 averages), then the lit volumes' levels; and the
+    /// names of the directional levels, in order.
+    fn readback_sources(&self) -> (Vec<(String, Src<'_>)>, Vec<String>) {
         let mut sources: Vec<(String, Src)> = Vec::new();
         let mut directional_names = Vec::new();
         match &self.volumes.data {
@@ -225,154 +257,64 @@ impl Gi {
             };
             sources.push((name, Src::Img(l.img, l.texel, l.level, l.side)));
         }
-        let sizes: Vec<u64> = sources
-            .iter()
-            .map(|(_, s)| match s {
-                Src::Buf(b) => b.size,
-                Src::Img(_, t, _, side) => (*side as u64).pow(3) * t,
-            })
-            .collect();
-        // Each part starts 16-byte aligned: an image's copy must start at a multiple of its
-        // texel size (a grid of odd size leaves the buffers before it a multiple of 4 only).
-        let offsets: Vec<u64> = sizes
-            .iter()
-            .scan(0u64, |end, size| {
-                let start = end.next_multiple_of(16);
-                *end = start + size;
-                Some(start)
-            })
-            .collect();
-        let total = offsets.last().zip(sizes.last()).map_or(0, |(o, s)| o + s);
-        let host = Buffer::new(
-            ctx,
-            "voxel readback",
-            total,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
-        ctx.one_shot(|cmd| {
-            let mut g = Graph::new(ctx, cmd, states, None);
-            let mut pass = g
-                .pass("voxel readback")
-                .buffer(&host, Access::TransferWrite);
-            for (_, s) in &sources {
-                pass = match s {
-                    Src::Buf(b) => pass.buffer(b, Access::TransferRead),
-                    Src::Img(i, ..) => pass.image(i, Access::TransferRead),
-                };
-            }
-            pass.record(|cmd| unsafe {
-                for (((_, s), size), &offset) in sources.iter().zip(&sizes).zip(&offsets) {
-                    match s {
-                        Src::Buf(b) => ctx.device.cmd_copy_buffer(
-                            cmd,
-                            b.raw,
-                            host.raw,
-                            &[vk::BufferCopy {
-                                src_offset: 0,
-                                dst_offset: offset,
-                                size: *size,
-                            }],
-                        ),
-                        Src::Img(i, _, level, side) => {
-                            copy_level(ctx, cmd, i, *level, *side, &host, offset)
-                        }
-                    }
-                }
-            });
-            g.barrier("voxel readback to host")
-                .buffer(&host, Access::HostRead)
-                .record(|_| {});
-        })?;
-        states.forget(host.raw);
+        (sources, directional_names)
+    }
 
-        let bytes = host.mapped().expect("readback is host-visible");
-        let mut parts = std::collections::HashMap::new();
-        for (((name, _), size), &offset) in sources.iter().zip(&sizes).zip(&offsets) {
-            let offset = offset as usize;
-            parts.insert(name.as_str(), &bytes[offset..offset + *size as usize]);
-        }
-        let nv = voxels as usize;
-        let mut dump = VoxelDump {
-            resolution: n,
-            filled: vec![false; nv],
-            count: vec![0; nv],
-            albedo: vec![Vec3::ZERO; nv],
-            normal: vec![Vec3::ZERO; nv],
-            emission: vec![Vec3::ZERO; nv],
-            radiance: None,
-            directional: None,
-            small_emission: None,
+    /// The default voxels: static plus dynamic fixed-point sums, divided by their count.
+    fn decode_sums(&self, parts: &Parts, dump: &mut VoxelDump) {
+        let (Some(sa), Some(sn)) = (parts.get("sa"), parts.get("sn")) else {
+            return;
         };
-        if let (Some(sa), Some(sn)) = (parts.get("sa"), parts.get("sn")) {
-            let (sa, sn) = (words(sa), words(sn));
-            let da = parts.get("da").map(|b| words(b));
-            let dn = parts.get("dn").map(|b| words(b));
-            let se = parts.get("se").map(|b| words(b));
-            let de = parts.get("de").map(|b| words(b));
-            let (sa_stride, sn_stride) = (ALBEDO_STRIDE as usize, NORMAL_STRIDE as usize);
-            let es = EMISSION_STRIDE as usize;
-            for v in 0..nv {
-                // The words in the order of glsl/voxel_common.glsl: count, albedo, normal,
-                // where the surfaces lie.
-                let mut w: Vec<u32> = sa[v * sa_stride..(v + 1) * sa_stride]
+        let (sa, sn) = (words(sa), words(sn));
+        let da = parts.get("da").map(|b| words(b));
+        let dn = parts.get("dn").map(|b| words(b));
+        let se = parts.get("se").map(|b| words(b));
+        let de = parts.get("de").map(|b| words(b));
+        let (sa_stride, sn_stride) = (ALBEDO_STRIDE as usize, NORMAL_STRIDE as usize);
+        let es = EMISSION_STRIDE as usize;
+        for v in 0..dump.filled.len() {
+            // The words in the order of glsl/voxel_common.glsl: count, albedo, normal,
+            // where the surfaces lie.
+            let mut w: Vec<u32> = sa[v * sa_stride..(v + 1) * sa_stride]
+                .iter()
+                .chain(&sn[v * sn_stride..(v + 1) * sn_stride])
+                .copied()
+                .collect();
+            if let (Some(da), Some(dn)) = (&da, &dn) {
+                let d = da[v * sa_stride..(v + 1) * sa_stride]
                     .iter()
-                    .chain(&sn[v * sn_stride..(v + 1) * sn_stride])
-                    .copied()
-                    .collect();
-                if let (Some(da), Some(dn)) = (&da, &dn) {
-                    let d = da[v * sa_stride..(v + 1) * sa_stride]
-                        .iter()
-                        .chain(&dn[v * sn_stride..(v + 1) * sn_stride]);
-                    for (a, b) in w.iter_mut().zip(d) {
-                        *a = a.wrapping_add(*b);
-                    }
-                }
-                let count = w[0];
-                dump.count[v] = count;
-                dump.filled[v] = count > 0;
-                if count == 0 {
-                    continue;
-                }
-                let inv = 1.0 / (count as f32 * 4096.0);
-                dump.albedo[v] = Vec3::new(w[1] as f32, w[2] as f32, w[3] as f32) * inv;
-                dump.normal[v] =
-                    Vec3::new(w[4] as i32 as f32, w[5] as i32 as f32, w[6] as i32 as f32) * inv;
-                if let Some(se) = &se {
-                    let mut e = [se[v * es], se[v * es + 1], se[v * es + 2], se[v * es + 3]];
-                    if let Some(de) = &de {
-                        for k in 0..4 {
-                            e[k] = e[k].wrapping_add(de[v * es + k]);
-                        }
-                    }
-                    let coverage = (e[3] as f32 / 4096.0).max(1.0);
-                    dump.emission[v] = Vec3::new(e[0] as f32, e[1] as f32, e[2] as f32)
-                        / (coverage * self.emission_scale);
+                    .chain(&dn[v * sn_stride..(v + 1) * sn_stride]);
+                for (a, b) in w.iter_mut().zip(d) {
+                    *a = a.wrapping_add(*b);
                 }
             }
-        }
-        if let (Some(pa), Some(pn)) = (parts.get("pa"), parts.get("pn")) {
-            let (pa, pn) = (words(pa), words(pn));
-            let pe = parts.get("pe").map(|b| words(b));
-            for v in 0..nv {
-                let a = unpack_rgba8(pa[v]);
-                dump.count[v] = a.w as u32;
-                dump.filled[v] = a.w > 0.0;
-                dump.albedo[v] = a.truncate() / 255.0;
-                dump.normal[v] = unpack_rgba8(pn[v]).truncate() / 255.0 * 2.0 - Vec3::ONE;
-                if let Some(pe) = &pe {
-                    dump.emission[v] = unpack_rgba8(pe[v]).truncate() / 255.0;
+            let count = w[0];
+            dump.count[v] = count;
+            dump.filled[v] = count > 0;
+            if count == 0 {
+                continue;
+            }
+            let inv = 1.0 / (count as f32 * 4096.0);
+            dump.albedo[v] = Vec3::new(w[1] as f32, w[2] as f32, w[3] as f32) * inv;
+            dump.normal[v] =
+                Vec3::new(w[4] as i32 as f32, w[5] as i32 as f32, w[6] as i32 as f32) * inv;
+            if let Some(se) = &se {
+                let mut e = [se[v * es], se[v * es + 1], se[v * es + 2], se[v * es + 3]];
+                if let Some(de) = &de {
+                    for k in 0..4 {
+                        e[k] = e[k].wrapping_add(de[v * es + k]);
+                    }
                 }
+                let coverage = (e[3] as f32 / 4096.0).max(1.0);
+                dump.emission[v] = Vec3::new(e[0] as f32, e[1] as f32, e[2] as f32)
+                    / (coverage * self.emission_scale);
             }
         }
-        let halves = |b: &[u8]| -> Vec<Vec4> {
-            b.chunks_exact(8)
-                .map(|c| {
-                    let h = |i: usize| f16_to_f32(u16::from_le_bytes([c[i], c[i + 1]]));
-                    Vec4::new(h(0), h(2), h(4), h(6))
-                })
-                .collect()
-        };
+    }
+
+    /// The lit volumes: radiance (back from its scale), the directional levels and the small
+    /// emission volume.
+    fn decode_lit(&self, parts: &Parts, directional_names: &[String], dump: &mut VoxelDump) {
         let directional: Vec<Vec4> = directional_names
             .iter()
             .flat_map(|name| halves(parts[name.as_str()]))
@@ -403,8 +345,111 @@ impl Gi {
                     .collect(),
             );
         }
-        Ok(dump)
     }
+}
+
+/// A readback source: a buffer, or one mip level of an image (bytes per texel, level, side).
+enum Src<'a> {
+    Buf(&'a Buffer),
+    Img(&'a Image, u64, u32, u32),
+}
+
+/// The copied bytes of each source, by name.
+type Parts<'a> = std::collections::HashMap<&'a str, &'a [u8]>;
+
+/// Copies the sources into one host-visible buffer, each part 16-byte aligned (an image's copy
+/// must start at a multiple of its texel size, and a grid of odd size leaves the buffers before
+/// it a multiple of 4 only). Returns the buffer and each part's offset and size. Waits.
+fn copy_to_host(
+    ctx: &Arc<Context>,
+    states: &mut ResourceStates,
+    sources: &[(String, Src)],
+) -> VkResult<(Buffer, Vec<(u64, u64)>)> {
+    let ranges: Vec<(u64, u64)> = sources
+        .iter()
+        .map(|(_, s)| match s {
+            Src::Buf(b) => b.size,
+            Src::Img(_, t, _, side) => (*side as u64).pow(3) * t,
+        })
+        .scan(0u64, |end, size| {
+            let start = end.next_multiple_of(16);
+            *end = start + size;
+            Some((start, size))
+        })
+        .collect();
+    let total = ranges.last().map_or(0, |(o, s)| o + s);
+    let host = Buffer::new(
+        ctx,
+        "voxel readback",
+        total,
+        vk::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuToCpu,
+    )?;
+    ctx.one_shot(|cmd| {
+        let mut g = Graph::new(ctx, cmd, states, None);
+        let mut pass = g
+            .pass("voxel readback")
+            .buffer(&host, Access::TransferWrite);
+        for (_, s) in sources {
+            pass = match s {
+                Src::Buf(b) => pass.buffer(b, Access::TransferRead),
+                Src::Img(i, ..) => pass.image(i, Access::TransferRead),
+            };
+        }
+        pass.record(|cmd| unsafe {
+            for ((_, s), &(offset, size)) in sources.iter().zip(&ranges) {
+                match s {
+                    Src::Buf(b) => ctx.device.cmd_copy_buffer(
+                        cmd,
+                        b.raw,
+                        host.raw,
+                        &[vk::BufferCopy {
+                            src_offset: 0,
+                            dst_offset: offset,
+                            size,
+                        }],
+                    ),
+                    Src::Img(i, _, level, side) => {
+                        copy_level(ctx, cmd, i, *level, *side, &host, offset)
+                    }
+                }
+            }
+        });
+        g.barrier("voxel readback to host")
+            .buffer(&host, Access::HostRead)
+            .record(|_| {});
+    })?;
+    states.forget(host.raw);
+    Ok((host, ranges))
+}
+
+/// --paper's voxels: RGBA8 averages (albedo with the count in alpha, normal, emission).
+fn decode_paper(parts: &Parts, dump: &mut VoxelDump) {
+    let (Some(pa), Some(pn)) = (parts.get("pa"), parts.get("pn")) else {
+        return;
+    };
+    let (pa, pn) = (words(pa), words(pn));
+    let pe = parts.get("pe").map(|b| words(b));
+    for v in 0..dump.filled.len() {
+        let a = unpack_rgba8(pa[v]);
+        dump.count[v] = a.w as u32;
+        dump.filled[v] = a.w > 0.0;
+        dump.albedo[v] = a.truncate() / 255.0;
+        dump.normal[v] = unpack_rgba8(pn[v]).truncate() / 255.0 * 2.0 - Vec3::ONE;
+        if let Some(pe) = &pe {
+            dump.emission[v] = unpack_rgba8(pe[v]).truncate() / 255.0;
+        }
+    }
+}
+
+/// RGBA16F texels.
+fn halves(b: &[u8]) -> Vec<Vec4> {
+    b.chunks_exact(8)
+        .map(|c| {
+            let h = |i: usize| f16_to_f32(u16::from_le_bytes([c[i], c[i + 1]]));
+            Vec4::new(h(0), h(2), h(4), h(6))
+        })
+        .collect()
 }
 
 /// Texels of `bytes` (RGBA16F when `texel` is 8, R32F when 4) with a non-finite component.
