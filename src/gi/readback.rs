@@ -5,7 +5,6 @@ use super::volumes::{VoxelData, ALBEDO_STRIDE, EMISSION_STRIDE, NORMAL_STRIDE};
 use super::Gi;
 use crate::vk::{vk, Access, Buffer, Context, Graph, Image, ResourceStates, VkResult};
 use glam::{Vec3, Vec4};
-use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
 /// Every voxel, x fastest then y then z.
@@ -378,13 +377,7 @@ fn copy_to_host(
         })
         .collect();
     let total = ranges.last().map_or(0, |(o, s)| o + s);
-    let host = Buffer::new(
-        ctx,
-        "voxel readback",
-        total,
-        vk::BufferUsageFlags::TRANSFER_DST,
-        MemoryLocation::GpuToCpu,
-    )?;
+    let host = Buffer::readback(ctx, "voxel readback", total)?;
     ctx.one_shot(|cmd| {
         let mut g = Graph::new(ctx, cmd, states, None);
         let mut pass = g
@@ -502,13 +495,7 @@ impl Gi {
             .map(|l| (l.side as u64).pow(3) * l.texel)
             .max()
             .unwrap_or(4);
-        let host = Buffer::new(
-            ctx,
-            "non-finite readback",
-            largest,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
+        let host = Buffer::readback(ctx, "non-finite readback", largest)?;
         for l in levels {
             let (img, level, side) = (l.img, l.level, l.side);
             ctx.one_shot(|cmd| {

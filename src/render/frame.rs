@@ -2,7 +2,6 @@
 //! write, and its host copy. A resize makes them again; nothing else changes size.
 
 use crate::vk::{vk, Access, Buffer, Context, Graph, Image, ImageDesc, ResourceStates, VkResult};
-use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
 pub const GBUFFER_FORMATS: [vk::Format; 5] = [
@@ -72,13 +71,7 @@ impl FrameTargets {
                 vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
             ),
         )?;
-        let readback = Buffer::new(
-            ctx,
-            "radiance readback",
-            (w * h * 16) as u64,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuToCpu,
-        )?;
+        let readback = Buffer::readback(ctx, "radiance readback", (w * h * 16) as u64)?;
         Ok(FrameTargets {
             width,
             height,

@@ -3,7 +3,6 @@
 
 use crate::vk::VkResult;
 use crate::vk::{vk, Access, Bindings, Buffer, Context, Graph, Image, ImageDesc, Pass, Usage};
-use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
 #[repr(C)]
@@ -99,13 +98,7 @@ impl Display {
             let bytes = target.extent.width.max(self.width) as u64
                 * target.extent.height.max(self.height) as u64
                 * 4;
-            self.shot = Some(Buffer::new(
-                &self.ctx,
-                "screenshot",
-                bytes,
-                vk::BufferUsageFlags::TRANSFER_DST,
-                MemoryLocation::GpuToCpu,
-            )?);
+            self.shot = Some(Buffer::readback(&self.ctx, "screenshot", bytes)?);
         }
         let shot_from_display = screenshot && !target.readable;
         if screenshot {

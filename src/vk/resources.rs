@@ -15,6 +15,17 @@ pub struct Buffer {
 }
 
 impl Buffer {
+    /// A host-visible buffer that copies from the device land in (a readback).
+    pub fn readback(ctx: &Arc<Context>, name: &str, size: u64) -> VkResult<Buffer> {
+        Buffer::new(
+            ctx,
+            name,
+            size,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuToCpu,
+        )
+    }
+
     pub fn new(
         ctx: &Arc<Context>,
         name: &str,
