@@ -18,9 +18,13 @@ struct AreaPolygon {
     vec4 plane;    // xyz the front normal (unit), w its dot with the polygon's points
     uvec4 range;   // x first vertex, y vertex count, z kind (AREA_POLYGON, AREA_SPHERE)
 };
-layout(set = 0, binding = 5, std430) readonly buffer AreaPolygons { AreaPolygon area_polygons[]; };
+// Uniform blocks of a fixed size: every pixel reads the same entries, and uniform loads are what
+// a GPU (and lavapipe) broadcasts cheaply. At most this many corners and polygons
+// (area_lights.rs: MAX_AREA_LIGHTS x MAX_EDGES).
+const uint MAX_AREA_CORNERS = 512u;
+layout(set = 0, binding = 5, std140) uniform AreaPolygons { AreaPolygon area_polygons[MAX_AREA_CORNERS]; };
 // Polygon corners counter-clockwise seen from the front (xyz); a sphere's centre and radius.
-layout(set = 0, binding = 6, std430) readonly buffer AreaVertices { vec4 area_vertices[]; };
+layout(set = 0, binding = 6, std140) uniform AreaVertices { vec4 area_vertices[MAX_AREA_CORNERS]; };
 
 // The LTC table (src/render/ltc.rs): per roughness (rows) and sqrt(1 - n.v) (within a row), on a
 // square grid whose first and last cells sit at 0 and 1, two vec4s: the inverse matrix's
@@ -266,19 +270,33 @@ vec3 area_vector_form_factor(Light light, vec3 p, float reach) {
 }
 
 #ifdef BRDF_GLSL
-// The light an area light sends towards v from p (normal n), unshadowed: the diffuse lobe by
-// the exact form factor (its Fresnel as the specular lobe's mean), the specular lobe by LTC.
-vec3 area_light_radiance(Light light, Surface s, vec3 p, vec3 n, vec3 v) {
+// What a surface point's area lighting needs from its material and view, the same for every
+// area light: the two lobes' frames and their weights.
+struct AreaLobes {
+    mat3 diffuse_frame;   // world offsets to the diffuse lobe's frame (area_frame)
+    mat3 specular_frame;  // and to the specular lobe's clamped cosine (the LTC's inverse)
+    vec3 diffuse;         // what each lobe's form factor is weighted by
+    vec3 specular;
+};
+
+// The diffuse lobe by the exact form factor (its Fresnel as the specular lobe's mean), the
+// specular lobe by LTC.
+AreaLobes area_lobes(Surface s, vec3 n, vec3 v) {
     mat3 local = area_frame(n, v);
     float n_dot_v = clamp(dot(n, v), 1e-4, 1.0);
     vec3 f0 = mix(min(vec3(0.04) * s.specular_color, vec3(1.0)) * s.specular, s.base_color, s.metallic);
     vec3 f90 = vec3(mix(s.specular, 1.0, s.metallic));
     Ltc ltc = ltc_lookup(s.roughness, n_dot_v);
     vec3 reflectance = f0 * (ltc.albedo - ltc.schlick) + f90 * ltc.schlick;
-    // Both lobes in one walk over the outlines (a lobe a surface lacks weighs 0).
-    vec2 f = area_form_factors(light, p, local, ltc.inverse * local);
     vec3 diffuse = (1.0 - s.metallic) * (1.0 - reflectance) * s.base_color;
-    return light.radiance.rgb * (diffuse * f.x + reflectance * f.y);
+    return AreaLobes(local, ltc.inverse * local, diffuse, reflectance);
+}
+
+// The light an area light sends towards the view from p, unshadowed: both lobes in one walk
+// over the outlines (a lobe a surface lacks weighs 0).
+vec3 area_light_radiance(Light light, AreaLobes lobes, vec3 p) {
+    vec2 f = area_form_factors(light, p, lobes.diffuse_frame, lobes.specular_frame);
+    return light.radiance.rgb * (lobes.diffuse * f.x + lobes.specular * f.y);
 }
 #endif
 

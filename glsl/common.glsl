@@ -44,7 +44,6 @@ struct Material {
     ivec4 tex1;           // x specular (A), y specular colour present; z double-sided flag
 };
 
-layout(set = 0, binding = 1, std430) readonly buffer Materials { Material materials[]; };
 struct Light {
     vec4 position_type;   // xyz position, w type
     vec4 direction_range; // xyz direction the light shines along, w range (0: none)
@@ -55,13 +54,19 @@ struct Light {
                           // radius of its apparent disc, w its reach from its centre,
                           // position_type.xyz)
 };
-layout(set = 0, binding = 3, std430) readonly buffer Lights { Light lights[]; };
+// A uniform block of a fixed size (gpu.rs: MAX_LIGHTS, 16 KiB, what every device allows):
+// every pixel reads the same light at once, which uniform loads broadcast (lavapipe reads a
+// storage buffer one lane at a time).
+const uint MAX_LIGHTS = 256u;
+layout(set = 0, binding = 3, std140) uniform Lights { Light lights[MAX_LIGHTS]; };
 
 struct ShadowView {
     mat4 view_proj;
     vec4 info;            // x 1 if perspective, y texel size (ortho: metres; persp: per metre of depth)
 };
-layout(set = 0, binding = 4, std430) readonly buffer ShadowViews { ShadowView shadow_views[]; };
+// As many as fit in 64 KiB (gpu.rs: MAX_SHADOW_VIEWS; context.rs asks the device for that much).
+const uint MAX_SHADOW_VIEWS = 819u;
+layout(set = 0, binding = 4, std140) uniform ShadowViews { ShadowView shadow_views[MAX_SHADOW_VIEWS]; };
 
 // Rec. 709 luminance.
 float luminance(vec3 c) {

@@ -40,10 +40,11 @@ void main() {
     Surface s = Surface(albedo.rgb, albedo.a, emission.a, spec.rgb, spec.a);
 
     vec3 radiance = emission.rgb;
+    AreaLobes lobes = area_lobes(s, n, v);
     for (uint i = 0u; i < frame.counts.x; i++) {
         Light light = lights[i];
         if (uint(light.position_type.w) == LIGHT_AREA) {
-            vec3 e = area_light_radiance(light, s, p, n, v);
+            vec3 e = area_light_radiance(light, lobes, p);
             if (all(equal(e, vec3(0.0)))) continue;
             radiance += e * area_shadow(light, p, geo, shadow_map, shadow_depth);
             continue;

@@ -23,7 +23,7 @@ layout(location = 3) out vec4 gb_emission;   // rgb emitted radiance, a roughnes
 layout(location = 4) out vec4 gb_specular;   // rgb specular colour, a specular factor
 
 void main() {
-    Material m = materials[draw.material];
+    Material m = material;
     vec4 base = m.base_color * texture(t_base_color, in_uv);
     if (m.params.w >= 0.0 && base.a < m.params.w) discard;
 

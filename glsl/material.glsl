@@ -1,5 +1,5 @@
-// A material's textures (set 1, bound per material). Absent textures are bound to a 1x1 white
-// texture, which leaves every factor unchanged.
+// A material's factors and textures (set 1, bound per material). Absent textures are bound to a
+// 1x1 white texture, which leaves every factor unchanged.
 #ifndef MATERIAL_GLSL
 #define MATERIAL_GLSL
 
@@ -9,5 +9,7 @@ layout(set = 1, binding = 2) uniform sampler2D t_normal;
 layout(set = 1, binding = 3) uniform sampler2D t_emissive;
 layout(set = 1, binding = 4) uniform sampler2D t_specular;
 layout(set = 1, binding = 5) uniform sampler2D t_specular_color;
+// Uniform, not a storage buffer indexed by the draw: every fragment of a draw reads the same.
+layout(set = 1, binding = 6, std140) uniform MaterialFactors { Material material; };
 
 #endif

@@ -12,7 +12,7 @@ layout(push_constant) uniform Draw {
 layout(location = 0) in vec2 in_uv;
 
 void main() {
-    Material m = materials[draw.material];
+    Material m = material;
     if (m.params.w >= 0.0) {
         float a = m.base_color.a * texture(t_base_color, in_uv).a;
         if (a < m.params.w) discard;

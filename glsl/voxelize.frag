@@ -82,7 +82,7 @@ void main() {
     vec2 px = gl_FragCoord.xy;
     if (any(lessThan(px, g_aabb.xy)) || any(greaterThan(px, g_aabb.zw))) discard;
 
-    Material m = materials[draw.material];
+    Material m = material;
     vec4 base = m.base_color * texture(t_base_color, g_uv);
     if (m.params.w >= 0.0 && base.a < m.params.w) discard;
     vec3 emission = m.emissive.rgb * texture(t_emissive, g_uv).rgb;

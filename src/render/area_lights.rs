@@ -22,6 +22,9 @@ use std::collections::HashMap;
 pub const MAX_AREA_LIGHTS: usize = 8;
 /// Outline edges a light may have (each costs every pixel two edge integrals).
 pub const MAX_EDGES: usize = 64;
+/// The area lights' corners (and polygons) the shaders' uniform blocks hold
+/// (glsl/area_lights.glsl: MAX_AREA_CORNERS).
+pub const MAX_AREA_CORNERS: usize = MAX_AREA_LIGHTS * MAX_EDGES;
 /// The sides of the polygon a sphere's disc is drawn as (glsl/area_lights.glsl).
 pub const SPHERE_SIDES: usize = 8;
 

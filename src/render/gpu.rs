@@ -83,6 +83,12 @@ pub const LIGHT_POINT: f32 = 1.0;
 pub const LIGHT_SPOT: f32 = 2.0;
 /// An emissive surface as an area light (render/area_lights.rs).
 pub const LIGHT_AREA: f32 = 3.0;
+/// The lights a scene may have, area lights included (glsl/common.glsl: MAX_LIGHTS; a uniform
+/// block of 16 KiB).
+pub const MAX_LIGHTS: usize = 256;
+/// The shadow views (six per point or area light), in a uniform block of 64 KiB
+/// (glsl/common.glsl: MAX_SHADOW_VIEWS).
+pub const MAX_SHADOW_VIEWS: usize = 819;
 /// glsl/area_lights.glsl: AREA_POLYGON, AREA_SPHERE.
 pub const AREA_POLYGON: u32 = 0;
 pub const AREA_SPHERE: u32 = 1;

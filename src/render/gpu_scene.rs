@@ -1,12 +1,16 @@
 //! The scene on the GPU: geometry, materials, textures with mip chains, lights and their
 //! shadow views. Uploaded once through a staging buffer.
 
-use super::area_lights::AreaLight;
-use super::gpu::{area_tables, as_bytes, GpuAreaPolygon, GpuLight, GpuMaterial, ShadowView};
+use super::area_lights::{AreaLight, MAX_AREA_CORNERS};
+use super::gpu::{
+    area_tables, as_bytes, GpuAreaPolygon, GpuLight, GpuMaterial, ShadowView, MAX_LIGHTS,
+    MAX_SHADOW_VIEWS,
+};
 use super::shadows::{light_views, soft_shadow_texels, LightViews};
 use crate::scene::{Aabb, Light, Scene, Texture, Wrap};
 use crate::vk::{
-    vk, Access, Buffer, Context, Graph, Image, ImageDesc, ResourceStates, Sampler, VkResult,
+    vk, Access, Buffer, Context, Graph, Image, ImageDesc, ResourceStates, Sampler, VkError,
+    VkResult,
 };
 use glam::Vec4;
 use gpu_allocator::MemoryLocation;
@@ -16,7 +20,10 @@ use std::sync::Arc;
 pub struct GpuScene {
     pub vertices: Buffer,
     pub indices: Buffer,
+    /// Each material's factors (glsl/material.glsl: MaterialFactors), `material_stride` bytes
+    /// apart.
     pub materials: Buffer,
+    pub material_stride: u64,
     pub lights: LightBuffers,
     pub textures: Vec<Image>,
     /// Which sampler each texture uses.
@@ -39,38 +46,52 @@ pub struct LightBuffers {
 impl LightBuffers {
     fn new(ctx: &Arc<Context>, table: &LightTable) -> VkResult<LightBuffers> {
         let storage = vk::BufferUsageFlags::STORAGE_BUFFER;
-        // Never empty: a buffer of no bytes cannot be bound.
-        fn or_one<T: Copy + Default>(v: &[T]) -> Vec<T> {
-            if v.is_empty() {
-                vec![T::default()]
-            } else {
-                v.to_vec()
-            }
+        let uniform = vk::BufferUsageFlags::UNIFORM_BUFFER;
+        // Uniform blocks at their declared size (glsl/common.glsl, glsl/area_lights.glsl).
+        fn full<T: Copy + Default>(v: &[T], size: usize) -> Vec<T> {
+            let mut v = v.to_vec();
+            v.resize(size, T::default());
+            v
         }
-        let views: Vec<ShadowView> = table
-            .views
-            .iter()
-            .flat_map(|v| v.views.iter().copied())
-            .collect();
+        let views = table.shadow_views();
+        if table.lights.len() > MAX_LIGHTS {
+            return Err(VkError::Request(format!(
+                "the scene has {} lights (its punctual lights and emissive surfaces as area \
+                 lights); voxgi renders at most {MAX_LIGHTS}",
+                table.lights.len()
+            )));
+        }
+        if views.len() > MAX_SHADOW_VIEWS {
+            return Err(VkError::Request(format!(
+                "the scene's lights need {} shadow views (six per point light or emissive \
+                 surface); voxgi renders at most {MAX_SHADOW_VIEWS}",
+                views.len()
+            )));
+        }
         Ok(LightBuffers {
-            lights: Buffer::with_data(ctx, "lights", as_bytes(&or_one(&table.lights)), storage)?,
+            lights: Buffer::with_data(
+                ctx,
+                "lights",
+                as_bytes(&full(&table.lights, MAX_LIGHTS)),
+                uniform,
+            )?,
             shadow_views: Buffer::with_data(
                 ctx,
                 "shadow views",
-                as_bytes(&or_one(&views)),
-                storage,
+                as_bytes(&full(&views, MAX_SHADOW_VIEWS)),
+                uniform,
             )?,
             area_polygons: Buffer::with_data(
                 ctx,
                 "area polygons",
-                as_bytes(&or_one(&table.area_polygons)),
-                storage,
+                as_bytes(&full(&table.area_polygons, MAX_AREA_CORNERS)),
+                uniform,
             )?,
             area_vertices: Buffer::with_data(
                 ctx,
                 "area vertices",
-                as_bytes(&or_one(&table.area_vertices)),
-                storage,
+                as_bytes(&full(&table.area_vertices, MAX_AREA_CORNERS)),
+                uniform,
             )?,
             ltc: Buffer::with_data(ctx, "LTC table", as_bytes(super::ltc::gpu_table()), storage)?,
         })
@@ -78,11 +99,7 @@ impl LightBuffers {
 
     /// Writes a table of the same lights and shapes (moved); the frame before was waited for.
     pub fn write(&mut self, table: &LightTable) {
-        let views: Vec<ShadowView> = table
-            .views
-            .iter()
-            .flat_map(|v| v.views.iter().copied())
-            .collect();
+        let views = table.shadow_views();
         if !table.lights.is_empty() {
             self.lights.write(0, as_bytes(&table.lights));
         }
@@ -102,6 +119,16 @@ pub struct LightTable {
     pub lights: Vec<GpuLight>,
     pub area_polygons: Vec<GpuAreaPolygon>,
     pub area_vertices: Vec<Vec4>,
+}
+
+impl LightTable {
+    /// Every light's shadow views in order.
+    fn shadow_views(&self) -> Vec<ShadowView> {
+        self.views
+            .iter()
+            .flat_map(|v| v.views.iter().copied())
+            .collect()
+    }
 }
 
 /// The scene's lights in order, then the area lights (each seen from its centre through six
@@ -261,8 +288,10 @@ pub fn mip_chain(tex: &Texture) -> Vec<(u32, u32, Vec<u8>)> {
     levels
 }
 
-/// The materials as the shaders read them (a default one when the scene has none).
-fn material_buffer(ctx: &Arc<Context>, scene: &Scene) -> VkResult<Buffer> {
+/// The materials as the shaders read them (a default one when the scene has none), each at an
+/// offset a uniform buffer binding may start at, and their stride. Each material's set binds its
+/// own: a draw reads its factors as uniforms, the same for every fragment.
+fn material_buffer(ctx: &Arc<Context>, scene: &Scene) -> VkResult<(Buffer, u64)> {
     let mats: Vec<GpuMaterial> = scene
         .materials
         .iter()
@@ -273,12 +302,25 @@ fn material_buffer(ctx: &Arc<Context>, scene: &Scene) -> VkResult<Buffer> {
     } else {
         mats
     };
-    Buffer::with_data(
+    let size = std::mem::size_of::<GpuMaterial>() as u64;
+    let align = ctx
+        .properties
+        .limits
+        .min_uniform_buffer_offset_alignment
+        .max(1);
+    let stride = size.div_ceil(align) * align;
+    let mut bytes = vec![0u8; (stride * mats.len() as u64) as usize];
+    for (i, m) in mats.iter().enumerate() {
+        let at = i * stride as usize;
+        bytes[at..at + size as usize].copy_from_slice(as_bytes(std::slice::from_ref(m)));
+    }
+    let buffer = Buffer::with_data(
         ctx,
         "materials",
-        as_bytes(&mats),
-        vk::BufferUsageFlags::STORAGE_BUFFER,
-    )
+        &bytes,
+        vk::BufferUsageFlags::UNIFORM_BUFFER,
+    )?;
+    Ok((buffer, stride))
 }
 
 /// The 1x1 white texture bound wherever a material has none.
@@ -393,7 +435,7 @@ impl GpuScene {
         )?;
 
         // Materials, lights and shadow views are small: host-visible buffers, written once.
-        let materials = material_buffer(ctx, scene)?;
+        let (materials, material_stride) = material_buffer(ctx, scene)?;
 
         let table = light_table(
             &scene.lights,
@@ -475,6 +517,7 @@ impl GpuScene {
             vertices,
             indices,
             materials,
+            material_stride,
             lights: light_buffers,
             textures,
             texture_samplers,

@@ -2,7 +2,7 @@
 //! glsl/common.glsl: the frame's uniforms, the materials, the lights and their shadow views) and
 //! one per material (set 1 of the passes that draw the scene: its textures, glsl/material.glsl).
 
-use super::gpu::{as_bytes, FrameUniforms};
+use super::gpu::{as_bytes, FrameUniforms, GpuMaterial};
 use super::gpu_scene::GpuScene;
 use crate::scene::{Material, Scene, TexRef};
 use crate::vk::{vk, Bindings, Buffer, Context, SharedSet, Usage, VkResult};
@@ -28,11 +28,10 @@ impl SceneBindings {
         )?;
         let table = Bindings::new()
             .uniform("frame", &frame_ubo)
-            .buffer("Materials", &gpu.materials, Usage::Read)
-            .buffer("Lights", &gpu.lights.lights, Usage::Read)
-            .buffer("ShadowViews", &gpu.lights.shadow_views, Usage::Read)
-            .buffer("AreaPolygons", &gpu.lights.area_polygons, Usage::Read)
-            .buffer("AreaVertices", &gpu.lights.area_vertices, Usage::Read)
+            .uniform("Lights", &gpu.lights.lights)
+            .uniform("ShadowViews", &gpu.lights.shadow_views)
+            .uniform("AreaPolygons", &gpu.lights.area_polygons)
+            .uniform("AreaVertices", &gpu.lights.area_vertices)
             .buffer("LtcTable", &gpu.lights.ltc, Usage::Read);
         let scene_set = SharedSet::new(ctx, "scene set", 0, vec![table])?;
         let default_material = [Material::default()];
@@ -41,7 +40,11 @@ impl SceneBindings {
         } else {
             &scene.materials[..]
         };
-        let tables = materials.iter().map(|m| material_table(gpu, m)).collect();
+        let tables = materials
+            .iter()
+            .enumerate()
+            .map(|(i, m)| material_table(gpu, i, m))
+            .collect();
         let materials = SharedSet::new(ctx, "material sets", 1, tables)?;
         Ok(SceneBindings {
             frame_ubo,
@@ -60,9 +63,9 @@ impl SceneBindings {
     }
 }
 
-/// A material's textures by their names in glsl/material.glsl (the white texture where it has
-/// none, or names one the scene lacks).
-fn material_table(gpu: &GpuScene, m: &Material) -> Bindings {
+/// Material `index`'s factors and textures by their names in glsl/material.glsl (the white
+/// texture where it has none, or names one the scene lacks).
+fn material_table(gpu: &GpuScene, index: usize, m: &Material) -> Bindings {
     let slots = [
         ("t_base_color", m.base_color_tex),
         ("t_metallic_roughness", m.metallic_roughness_tex),
@@ -71,7 +74,13 @@ fn material_table(gpu: &GpuScene, m: &Material) -> Bindings {
         ("t_specular", m.specular_tex),
         ("t_specular_color", m.specular_color_tex),
     ];
-    slots.iter().fold(Bindings::new(), |t, &(name, tex)| {
+    let factors = Bindings::new().uniform_range(
+        "MaterialFactors",
+        &gpu.materials,
+        index as u64 * gpu.material_stride,
+        std::mem::size_of::<GpuMaterial>() as u64,
+    );
+    slots.iter().fold(factors, |t, &(name, tex)| {
         let i = tex
             .map(|t: TexRef| t.texture as usize)
             .unwrap_or(gpu.white());

@@ -213,6 +213,9 @@ const REQUIRED_FORMATS: &[(vk::Format, vk::FormatFeatureFlags, &str)] = &[
     ),
 ];
 
+/// The largest uniform block the shaders declare.
+pub const UNIFORM_BLOCK_BYTES: u32 = 65536;
+
 /// Lists what the device lacks of the renderer's needs (empty when it has everything).
 fn missing_requirements(
     instance: &ash::Instance,
@@ -251,6 +254,14 @@ fn missing_requirements(
         if have == vk::FALSE {
             missing.push(format!("the {name} feature"));
         }
+    }
+    // The shadow views' uniform block (glsl/common.glsl: MAX_SHADOW_VIEWS); desktop GPUs and
+    // lavapipe allow 64 KiB or more, the specification's minimum is 16.
+    if props.limits.max_uniform_buffer_range < UNIFORM_BLOCK_BYTES {
+        missing.push(format!(
+            "a maxUniformBufferRange of {UNIFORM_BLOCK_BYTES} bytes (it has {})",
+            props.limits.max_uniform_buffer_range
+        ));
     }
     for &(format, usage, what) in REQUIRED_FORMATS {
         let fp = unsafe { instance.get_physical_device_format_properties(pd, format) };

@@ -54,7 +54,8 @@ enum What {
     StorageImage(vk::ImageView),
     Sampled(vk::ImageView, vk::Sampler),
     StorageBuffer(vk::Buffer),
-    Uniform(vk::Buffer),
+    /// A buffer and the bytes of it bound (offset, range).
+    Uniform(vk::Buffer, u64, u64),
 }
 
 impl What {
@@ -63,7 +64,7 @@ impl What {
             What::StorageImage(_) => vk::DescriptorType::STORAGE_IMAGE,
             What::Sampled(..) => vk::DescriptorType::COMBINED_IMAGE_SAMPLER,
             What::StorageBuffer(_) => vk::DescriptorType::STORAGE_BUFFER,
-            What::Uniform(_) => vk::DescriptorType::UNIFORM_BUFFER,
+            What::Uniform(..) => vk::DescriptorType::UNIFORM_BUFFER,
         }
     }
 }
@@ -162,7 +163,13 @@ impl Bindings {
 
     /// A uniform buffer.
     pub fn uniform(self, name: &str, buffer: &Buffer) -> Self {
-        let what = What::Uniform(buffer.raw);
+        self.uniform_range(name, buffer, 0, vk::WHOLE_SIZE)
+    }
+
+    /// Part of a uniform buffer: `range` bytes from `offset` (a multiple of the device's
+    /// minUniformBufferOffsetAlignment).
+    pub fn uniform_range(self, name: &str, buffer: &Buffer, offset: u64, range: u64) -> Self {
+        let what = What::Uniform(buffer.raw, offset, range);
         self.push(
             name,
             what,
@@ -307,10 +314,10 @@ fn write(
     let infos: Vec<([vk::DescriptorBufferInfo; 1], [vk::DescriptorImageInfo; 1])> = found
         .iter()
         .map(|(_, w)| {
-            let buffer = |raw| vk::DescriptorBufferInfo {
+            let buffer = |raw, offset, range| vk::DescriptorBufferInfo {
                 buffer: raw,
-                offset: 0,
-                range: vk::WHOLE_SIZE,
+                offset,
+                range,
             };
             let image = |view, sampler, layout| vk::DescriptorImageInfo {
                 sampler,
@@ -318,7 +325,8 @@ fn write(
                 image_layout: layout,
             };
             match *w {
-                What::StorageBuffer(b) | What::Uniform(b) => ([buffer(b)], Default::default()),
+                What::StorageBuffer(b) => ([buffer(b, 0, vk::WHOLE_SIZE)], Default::default()),
+                What::Uniform(b, offset, range) => ([buffer(b, offset, range)], Default::default()),
                 What::StorageImage(v) => (
                     Default::default(),
                     [image(v, vk::Sampler::null(), vk::ImageLayout::GENERAL)],
@@ -339,7 +347,7 @@ fn write(
                 .dst_binding(*binding)
                 .descriptor_type(w.ty());
             match w {
-                What::StorageBuffer(_) | What::Uniform(_) => write.buffer_info(buffer),
+                What::StorageBuffer(_) | What::Uniform(..) => write.buffer_info(buffer),
                 _ => write.image_info(image),
             }
         })
@@ -665,8 +673,8 @@ fn access(what: What, usage: Usage, graphics: bool) -> Access {
     match (what, graphics, usage) {
         (What::Sampled(..), false, _) => Access::ComputeSampled,
         (What::Sampled(..), true, _) => Access::FragmentSampled,
-        (What::Uniform(_), false, _) => Access::ComputeStorageRead,
-        (What::Uniform(_), true, _) => Access::GraphicsBufferRead,
+        (What::Uniform(..), false, _) => Access::ComputeStorageRead,
+        (What::Uniform(..), true, _) => Access::GraphicsBufferRead,
         (_, false, Usage::Read) => Access::ComputeStorageRead,
         (_, false, Usage::Write) => Access::ComputeStorageWrite,
         (_, false, Usage::ReadWrite) => Access::ComputeStorageReadWrite,

@@ -458,8 +458,10 @@ mod tests {
         let lights = i
             .binding(0, "Lights")
             .expect("an anonymous block, by its block name");
-        assert_eq!((lights.binding, lights.ty), (3, T::STORAGE_BUFFER));
-        assert!(lights.reads && !lights.writes);
+        assert_eq!((lights.binding, lights.ty), (3, T::UNIFORM_BUFFER));
+        let ltc = i.binding(0, "LtcTable").expect("a storage block");
+        assert_eq!((ltc.binding, ltc.ty), (7, T::STORAGE_BUFFER));
+        assert!(ltc.reads && !ltc.writes);
         let shadow = i.binding(1, "shadow_map").unwrap();
         assert_eq!((shadow.binding, shadow.ty), (5, T::COMBINED_IMAGE_SAMPLER));
 
