@@ -123,10 +123,18 @@ vec3 edge_term(vec3 a, vec3 b) {
     return s > 0.0 ? c * (atan(s, dot(a, b)) / s) : vec3(0.0);
 }
 
+// The z term of edge_term for two points on the horizon z = 0: the signed angle between them.
+float horizon_arc(vec3 a, vec3 b) {
+    float s = a.x * b.y - a.y * b.x;
+    return s != 0.0 ? atan(s, a.x * b.x + a.y * b.y) : 0.0;
+}
+
 // Lambert's sum clipped to the horizon z >= 0 of a lobe's frame, built an edge at a time as the
 // outline's corners come (relative to the shaded point, in that frame): an edge leaving the
 // upper side ends at the horizon, and the horizon's arc to where the outline comes back
-// closes it (in any order: arcs along the horizon add up).
+// closes it (in any order: arcs along the horizon add up). Written without branches around
+// the edge terms: SIMD lanes (and lavapipe) run every branch that any lane takes, so each edge
+// costs one edge term and one horizon arc, whichever way it crosses.
 struct Clip {
     vec3 first;        // the first corner
     vec3 a;            // the last corner
@@ -146,26 +154,20 @@ void clip_edge(inout Clip c, vec3 b) {
     vec3 a = c.a;
     bool a_up = a.z >= 0.0;
     bool b_up = b.z >= 0.0;
-    if (a_up && b_up) {
-        c.sum += edge_term(a, b).z;
-    } else if (a_up != b_up) {
-        vec3 x = mix(a, b, a.z / (a.z - b.z));
-        x.z = 0.0;
-        if (a_up) {
-            c.sum += edge_term(a, x).z;
-            c.exit_point = x;
-            c.exited = true;
-        } else {
-            if (c.exited) {
-                c.sum += edge_term(c.exit_point, x).z;
-                c.exited = false;
-            } else {
-                c.first_entry = x;
-                c.entered_first = true;
-            }
-            c.sum += edge_term(x, b).z;
-        }
-    }
+    bool leaves = a_up && !b_up;
+    bool enters = !a_up && b_up;
+    // Where it crosses the horizon (a itself when it does not: then unused or an empty edge).
+    vec3 x = mix(a, b, leaves || enters ? a.z / (a.z - b.z) : 0.0);
+    x.z = 0.0;
+    // The part above the horizon; an edge wholly under it is x to x, whose term is 0.
+    c.sum += edge_term(a_up ? a : x, b_up ? b : x).z;
+    // Coming back up after going under: the horizon's arc from where it went under.
+    bool closes = enters && c.exited;
+    c.sum += closes ? horizon_arc(c.exit_point, x) : 0.0;
+    c.first_entry = enters && !c.exited && !c.entered_first ? x : c.first_entry;
+    c.entered_first = c.entered_first || (enters && !c.exited);
+    c.exit_point = leaves ? x : c.exit_point;
+    c.exited = leaves || (c.exited && !enters);
     c.a = b;
 }
 
@@ -173,7 +175,7 @@ void clip_edge(inout Clip c, vec3 b) {
 // faces the point.
 float clip_end(inout Clip c) {
     clip_edge(c, c.first);
-    if (c.exited && c.entered_first) c.sum += edge_term(c.exit_point, c.first_entry).z;
+    if (c.exited && c.entered_first) c.sum += horizon_arc(c.exit_point, c.first_entry);
     return c.sum;
 }
 
