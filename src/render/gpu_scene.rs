@@ -49,6 +49,8 @@ impl LightBuffers {
         let uniform = vk::BufferUsageFlags::UNIFORM_BUFFER;
         // Uniform blocks at their declared size (glsl/common.glsl, glsl/area_lights.glsl).
         fn full<T: Copy + Default>(v: &[T], size: usize) -> Vec<T> {
+            // Counts are checked below, or bounded by MAX_AREA_LIGHTS x MAX_EDGES.
+            assert!(v.len() <= size, "{} entries for a block of {size}", v.len());
             let mut v = v.to_vec();
             v.resize(size, T::default());
             v
