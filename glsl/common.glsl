@@ -17,8 +17,10 @@ layout(set = 0, binding = 0, std140) uniform Frame {
     mat4 proj;
     vec4 eye;         // xyz camera position
     uvec4 counts;     // x lights, y width, z height, w shadow views
-    vec4 shadow;      // x shadow-map resolution, y normal-offset in texels, z PCF radius in texels,
-                      // w the widest soft-shadow filter's half width in texels
+    vec4 shadow;      // x shadow-map resolution, y normal-offset in texels, z PCF radius in texels
+    vec4 area_shadow; // the area lights' shadow maps: x resolution, y their first view (the
+                      // punctual lights' come first), z the widest soft-shadow filter's half
+                      // width in texels
     vec4 grid;        // voxel grid: xyz origin (min corner), w edge length (metres)
     uvec4 grid_info;  // x resolution N, y bounces, z diffuse cone count, w flags (FLAG_*)
     vec4 cone;        // x diffuse aperture (tan of half angle), y step factor, z max distance

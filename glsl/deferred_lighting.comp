@@ -15,8 +15,10 @@ layout(set = 1, binding = 3) uniform sampler2D gb_emission;
 layout(set = 1, binding = 4) uniform sampler2D gb_specular;
 layout(set = 1, binding = 5) uniform sampler2DArrayShadow shadow_map;
 layout(set = 1, binding = 6, rgba32f) uniform writeonly image2D out_radiance;
-// The same shadow maps' depths, for the area lights' blocker search.
-layout(set = 1, binding = 7) uniform sampler2DArray shadow_depth;
+// The area lights' shadow maps (lights.glsl: area_shadow), for comparisons and, read as depths,
+// for the blocker search.
+layout(set = 1, binding = 7) uniform sampler2DArrayShadow area_shadow_map;
+layout(set = 1, binding = 8) uniform sampler2DArray area_shadow_depth;
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -46,7 +48,7 @@ void main() {
         if (uint(light.position_type.w) == LIGHT_AREA) {
             vec3 e = area_light_radiance(light, lobes, p);
             if (all(equal(e, vec3(0.0)))) continue;
-            radiance += e * area_shadow(light, p, geo, shadow_map, shadow_depth);
+            radiance += e * area_shadow(light, p, geo, area_shadow_map, area_shadow_depth);
             continue;
         }
         vec3 l;
@@ -54,7 +56,7 @@ void main() {
         vec3 e = light_irradiance(light, p, l, dist);
         float n_dot_l = dot(n, l);
         if (n_dot_l <= 0.0 || dot(geo, l) <= 0.0 || all(equal(e, vec3(0.0)))) continue;
-        float vis = shadow_visibility(light, p, geo, shadow_map);
+        float vis = shadow_visibility(light, p, geo, shadow_map, area_shadow_map);
         radiance += brdf(s, n, v, l) * e * n_dot_l * vis;
     }
     imageStore(out_radiance, px, vec4(radiance, 1.0));

@@ -14,6 +14,7 @@
 layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
 
 layout(set = 1, binding = 4) uniform sampler2DArrayShadow shadow_map;
+layout(set = 1, binding = 11) uniform sampler2DArrayShadow area_shadow_map;
 #ifdef PAPER
 layout(set = 1, binding = 5, rgba8) uniform writeonly image3D radiance;
 #else
@@ -99,7 +100,7 @@ void main() {
 #endif
         float vis = (frame.grid_info.w & FLAG_VOXEL_SHADOWS) != 0u
             ? voxel_visibility(q, l, dist)
-            : shadow_visibility(light, q, side, shadow_map);
+            : shadow_visibility(light, q, side, shadow_map, area_shadow_map);
         irradiance += e * n_dot_l * vis;
         if (two_sided) {
             lit_side += luminance(v.albedo * e * n_dot_l * vis) * normalize(w * l + 1e-12);

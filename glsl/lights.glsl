@@ -68,8 +68,7 @@ uint cube_face(vec3 d) {
 // (r + 1)^2 gathers of 2x2 comparisons: the grid weighs the 2r + 2 texels along each axis
 // 1 - f, 1, ..., 1, f (f: uv's place between texel centres), so each gather's four texels
 // take the products of those weights. Half the reads or fewer, the same mean.
-float pcf_grid(sampler2DArrayShadow map, vec2 uv, float layer, float depth, int r) {
-    float res = frame.shadow.x;
+float pcf_grid(sampler2DArrayShadow map, float res, vec2 uv, float layer, float depth, int r) {
     vec2 st = uv * res - 0.5;
     vec2 base = floor(st);
     vec2 f = st - base;
@@ -91,9 +90,11 @@ float pcf_grid(sampler2DArrayShadow map, vec2 uv, float layer, float depth, int 
 }
 
 // Fraction of the light that reaches p (1 = lit), by percentage-closer filtering of the light's
-// shadow map. The lookup point moves along the geometric normal by about a texel so that a
-// surface does not shadow itself (acne) without detaching shadows from their casters.
-float shadow_visibility(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow shadow_map) {
+// shadow map (an area light's in `area_map`, seen from its centre). The lookup point moves along
+// the geometric normal by about a texel so that a surface does not shadow itself (acne) without
+// detaching shadows from their casters.
+float shadow_visibility(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow shadow_map,
+                        sampler2DArrayShadow area_map) {
     uint count = uint(light.cone.w);
     if (count == 0u) return 1.0;
     uint view = uint(light.cone.z);
@@ -114,7 +115,12 @@ float shadow_visibility(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow sh
     if (!shadow_coords(sv, q, uv, depth)) return 1.0;
     if (any(lessThan(uv, vec2(0.0))) || any(greaterThan(uv, vec2(1.0)))) return 1.0;
 
-    return pcf_grid(shadow_map, uv, float(view), depth, int(frame.shadow.z));
+    int r = int(frame.shadow.z);
+    if (uint(light.position_type.w) == LIGHT_AREA) {
+        float layer = float(view) - frame.area_shadow.y;
+        return pcf_grid(area_map, frame.area_shadow.x, uv, layer, depth, r);
+    }
+    return pcf_grid(shadow_map, frame.shadow.x, uv, float(view), depth, r);
 }
 
 // Tap i of n spread evenly over the unit disc (Vogel's spiral: golden-angle turns, radii by
@@ -163,9 +169,10 @@ float area_shadow(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow shadow_m
     vec2 uv;
     float depth;
     if (!shadow_coords(sv, q, uv, depth)) return 1.0;
-    float res = frame.shadow.x;
+    float res = frame.area_shadow.x;
+    float layer = float(view) - frame.area_shadow.y;
     // The widest filter the views are widened for (shadows.rs: SOFT_SHADOW_SHARE).
-    float widest = max(frame.shadow.w, 1.0);
+    float widest = max(frame.area_shadow.z, 1.0);
     float radius = light.direction_range.x;
     float near = sv.info.z;
     float far = sv.info.w;
@@ -180,7 +187,7 @@ float area_shadow(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow shadow_m
     float found = 0.0;
     for (int i = 0; i < 16; i++) {
         vec2 o = vogel_disc(i, 16) * search / res;
-        float d = texture(shadow_depth, vec3(uv + o, float(view))).r;
+        float d = texture(shadow_depth, vec3(uv + o, layer)).r;
         if (d < depth + dot(slope, o) - bias) {
             blockers += near * far / (far - d * (far - near));
             found += 1.0;
@@ -195,7 +202,7 @@ float area_shadow(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow shadow_m
     float sum = 0.0;
     for (int i = 0; i < 32; i++) {
         vec2 o = vogel_disc(i, 32) * penumbra / res;
-        sum += texture(shadow_map, vec4(uv + o, float(view), depth + dot(slope, o) - bias));
+        sum += texture(shadow_map, vec4(uv + o, layer, depth + dot(slope, o) - bias));
     }
     return sum / 32.0;
 }

@@ -161,13 +161,23 @@ struct RenderOpts {
     /// With --mode voxels-radiance: the directional volumes at mip level L
     #[arg(long, value_name = "L")]
     mip: Option<u32>,
-    /// Shadow-map texels per side
+    /// Shadow-map texels per side (punctual lights)
     #[arg(long, default_value_t = 2048,
           value_parser = clap::value_parser!(u32).range(16..=16384))]
     shadow_res: u32,
+    /// Shadow-map texels per side of the area lights (emissive surfaces), whose soft shadows
+    /// need fewer
+    #[arg(long, default_value_t = 512,
+          value_parser = clap::value_parser!(u32).range(16..=16384))]
+    area_shadow_res: u32,
     /// Print each pass's median GPU time
     #[arg(long)]
     timings: bool,
+    /// Antialiasing: while the view holds still, the image is the mean of N frames drawn at
+    /// sub-pixel offsets (each pixel the mean over its footprint); 1 is off
+    #[arg(long, value_name = "N", default_value_t = 8,
+          value_parser = clap::value_parser!(u32).range(1..=1024))]
+    accumulate: u32,
     #[command(flatten)]
     gi: GiOpts,
 }
@@ -237,7 +247,8 @@ struct RenderCmd {
     /// .exr: linear radiance (RGB float); .png: display image
     #[arg(long, default_value = "voxgi.png")]
     out: PathBuf,
-    /// Frames to render (timings are medians over them; default 1, 5 with --timings)
+    /// Frames to render (timings are medians over them; default: --accumulate's, at least 5
+    /// with --timings)
     #[arg(long, value_name = "N")]
     frames: Option<u32>,
     /// The moving scene (animations, --spin) as it is T seconds in
@@ -396,6 +407,10 @@ struct BenchCmd {
     /// Display exposure of both images for FLIP, in stops
     #[arg(long, value_name = "EV", default_value_t = 0.0)]
     exposure: f32,
+    /// Frames in the still image's antialiasing mean (1: off; see render --accumulate)
+    #[arg(long, value_name = "N", default_value_t = 8,
+          value_parser = clap::value_parser!(u32).range(1..=1024))]
+    accumulate: u32,
     #[command(flatten)]
     device: DeviceOpts,
 }
@@ -490,6 +505,8 @@ impl RenderOpts {
             height: self.size.height,
             mode: self.mode,
             shadow_resolution: self.shadow_res,
+            area_shadow_resolution: self.area_shadow_res,
+            accumulate: self.accumulate,
             timings: self.timings,
             gi: self.gi.settings(),
             mip: self.mip,
@@ -592,7 +609,11 @@ fn render(c: RenderCmd) -> Result<()> {
     }
     let (mut settings, mut scene, motion) = c.show.load()?;
     let (width, height, timings) = (settings.width, settings.height, settings.timings);
-    let frames = c.frames.unwrap_or(if timings { 5 } else { 1 }).max(1);
+    // By default the image is the whole antialiasing mean.
+    let frames = c
+        .frames
+        .unwrap_or(settings.accumulate.max(if timings { 5 } else { 1 }))
+        .max(1);
     let time = c.time.unwrap_or(0.0);
     if !time.is_finite() || time < 0.0 {
         bail!("--time {time} must be a finite number of seconds, 0 or more");
@@ -844,6 +865,7 @@ fn bench(c: BenchCmd) -> Result<()> {
         orbit_deg: c.orbit,
         extra_lights: c.sun.sun.into_iter().collect(),
         exposure: c.exposure,
+        accumulate: c.accumulate,
         validate: c.device.validate,
         device: c.device.device,
         command_line: voxgi::bench::shell_words(

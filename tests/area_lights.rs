@@ -672,8 +672,9 @@ fn a_rough_metal_and_a_rough_dielectric_reflect_a_quad_light_as_the_brdf_says() 
     );
 }
 
-#[test]
-fn a_plate_under_a_quad_light_casts_the_path_tracers_penumbra() {
+/// The worst difference of the plate's shadow profile from the path tracer's (see below),
+/// with the area light's shadow maps at `area_resolution` texels per side.
+fn plate_penumbra_error(area_resolution: u32) -> f32 {
     // A 40 cm quad light (Le 10) 1 m up; a black 30 cm plate 40 cm up, 80 cm off to +x: its
     // shadow on the floor spans x 0.95 to 1.72, penumbrae 27 cm wide (0.4 x 0.4 / 0.6) about
     // an umbra 1.22 to 1.45. Seen from 2 m straight over x = 1.3, the profile across it (three
@@ -707,6 +708,7 @@ fn a_plate_under_a_quad_light_casts_the_path_tracers_penumbra() {
     let mut set = direct_settings();
     set.width = size;
     set.height = size;
+    set.area_shadow_resolution = area_resolution;
     let img = render(&s, set);
     let reference = voxgi::reference::render(
         &s,
@@ -737,10 +739,93 @@ fn a_plate_under_a_quad_light_casts_the_path_tracers_penumbra() {
         }
         worst = worst.max((got - want).abs() / lit);
     }
-    // Measured: 0.12 (ours a little brighter in the outer half of the penumbra).
+    worst
+}
+
+#[test]
+fn a_plate_under_a_quad_light_casts_the_path_tracers_penumbra() {
+    // The default area shadow maps (512 texels) and ones four times finer: soft shadows
+    // need no finer maps.
+    let (coarse, fine) = (plate_penumbra_error(512), plate_penumbra_error(2048));
+    eprintln!("penumbra profile off by {coarse} (512 texels), {fine} (2048)");
+    // Measured: 0.12 with 512 and with 2048 texels (ours a little brighter in the outer half of
+    // the penumbra).
+    for (res, worst) in [(512, coarse), (2048, fine)] {
+        assert!(
+            worst < 0.15,
+            "{res} texels: the profile is off by {worst} of the lit floor"
+        );
+    }
+}
+
+#[test]
+fn the_area_lights_shadow_resolution_leaves_punctual_shadows_alone() {
+    // A pole under a quad light and a point light. The point light's share of the image (with
+    // it, less without it) is the same whatever the area light's maps; the area light's own
+    // shadow changes with them.
+    let mut s = lamp_over_floor(3.0, 0.2, 1.0, 2.0);
+    let white = lambert(&mut s, Vec3::splat(0.8));
+    quad(
+        &mut s,
+        [
+            Vec3::new(0.3, 0.0, 0.0),
+            Vec3::new(0.3, 0.0, 0.1),
+            Vec3::new(0.3, 0.6, 0.1),
+            Vec3::new(0.3, 0.6, 0.0),
+        ],
+        white,
+    );
+    top_camera(&mut s, HEIGHT, FOV);
+    let mut lit = s.clone();
+    lit.lights.push(light(
+        voxgi::scene::LightKind::Point,
+        Vec3::splat(5.0),
+        Vec3::new(0.4, 2.0, 0.3),
+        Vec3::NEG_Y,
+    ));
+    let at = |scene: &Scene, area_shadow_resolution| {
+        render(
+            scene,
+            RenderSettings {
+                area_shadow_resolution,
+                ..direct_settings()
+            },
+        )
+    };
+    let point_share = |res| {
+        let (with, without) = (at(&lit, res), at(&s, res));
+        let share: Vec<f32> = with
+            .pixels
+            .iter()
+            .zip(&without.pixels)
+            .map(|(a, b)| a[0] - b[0])
+            .collect();
+        (share, without)
+    };
+    let ((coarse, area_coarse), (fine, area_fine)) = (point_share(64), point_share(1024));
+    let brightest = fine.iter().fold(0.0f32, |m, &v| m.max(v));
     assert!(
-        worst < 0.15,
-        "the profile is off by {worst} of the lit floor"
+        brightest > 0.1,
+        "the point light adds nothing ({brightest})"
+    );
+    let worst = coarse
+        .iter()
+        .zip(&fine)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0f32, f32::max);
+    assert!(
+        worst < 1e-5 * brightest,
+        "the point light's share changed with the area maps by {worst} (of {brightest})"
+    );
+    let area_change = area_coarse
+        .pixels
+        .iter()
+        .zip(&area_fine.pixels)
+        .map(|(a, b)| (a[0] - b[0]).abs())
+        .fold(0.0f32, f32::max);
+    assert!(
+        area_change > 0.0,
+        "the area light's shadow ignores its maps' resolution"
     );
 }
 

@@ -26,6 +26,9 @@ fn settings(mode: Mode, trace_scale: u32, temporal: u32) -> RenderSettings {
             temporal,
             ..Default::default()
         },
+        // The temporal trace alone: frames are compared with each other and with fresh
+        // renderers' first frames, one sample per pixel (no antialiasing mean).
+        accumulate: 1,
         ..Default::default()
     }
 }

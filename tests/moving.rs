@@ -79,6 +79,8 @@ fn settings(node: usize) -> RenderSettings {
             ..Default::default()
         },
         dynamic_nodes: vec![node],
+        // Still frames are compared for equality: one sample per pixel, no antialiasing mean.
+        accumulate: 1,
         ..Default::default()
     }
 }

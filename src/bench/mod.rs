@@ -46,6 +46,8 @@ pub struct BenchOptions {
     pub extra_lights: Vec<Light>,
     /// Display exposure of both images for FLIP.
     pub exposure: f32,
+    /// Frames in the still image's antialiasing mean (RenderSettings::accumulate; 1: off).
+    pub accumulate: u32,
     pub validate: bool,
     pub device: Option<String>,
     /// The command line, quoted in results.md.
@@ -67,6 +69,7 @@ impl Default for BenchOptions {
             orbit_deg: 10.0,
             extra_lights: Vec::new(),
             exposure: 0.0,
+            accumulate: RenderSettings::default().accumulate,
             validate: false,
             device: None,
             command_line: String::new(),
@@ -400,6 +403,7 @@ fn measure(
         mode: Mode::Full,
         timings: true,
         gi: setting.gi.clone(),
+        accumulate: opts.accumulate,
         ..Default::default()
     };
     let mut r = Renderer::new(ctx, scene, settings).map_err(|e| e.to_string())?;
@@ -444,6 +448,10 @@ fn measure(
         r.render(false).map_err(|e| e.to_string())?;
     }
     let still = Spread::of(&r.frame_ms).ok_or("no frame was timed")?;
+    // The still image once its antialiasing mean is complete (the relit frame was its first).
+    for _ in opts.frames + 2..=r.settings.accumulate {
+        r.render(false).map_err(|e| e.to_string())?;
+    }
     r.render(true).map_err(|e| e.to_string())?;
     let still_image = image(&r);
     // The moving camera: about the vertical axis through the scene's centre, by

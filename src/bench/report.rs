@@ -182,8 +182,9 @@ pub fn json(res: &BenchResults) -> String {
     let _ = writeln!(out, "  \"device\": {},", json_string(&res.device));
     let _ = writeln!(
         out,
-        "  \"width\": {}, \"height\": {}, \"frames\": {}, \"warmup\": {}, \"exposure\": {},",
-        o.width, o.height, o.frames, o.warmup, o.exposure
+        "  \"width\": {}, \"height\": {}, \"frames\": {}, \"warmup\": {}, \"exposure\": {}, \
+         \"accumulate\": {},",
+        o.width, o.height, o.frames, o.warmup, o.exposure, o.accumulate
     );
     let _ = writeln!(
         out,
@@ -279,16 +280,19 @@ pub fn markdown(res: &BenchResults) -> String {
         out,
         "- time: median (min to max) over {} frame{} after {} warm-up frame{}, submission to \
          fence (wall clock). still: a still frame (G-buffer, direct light, trace; a \
-         temporal trace keeps its blocks' cones); relit: a frame after the lights moved \
-         (shadow maps, voxel lighting and bounces run; a temporal trace traces every block's \
-         cones again); moving: the camera swung about the scene's vertical axis by up to {} \
-         degrees and back over {} frames, its error at the last (the start again). GPU \
+         temporal trace keeps its blocks' cones), its error once the antialiasing mean of \
+         its frames is complete ({} frames; 1: one sample per pixel); relit: a frame after the lights moved (shadow maps, voxel \
+         lighting and bounces run; a temporal trace traces every block's cones again; one \
+         sample per pixel); moving: the camera swung about the scene's vertical axis by up \
+         to {} degrees and back over {} frames, its error at the last (the start again, one \
+         sample per pixel). GPU \
          passes: timestamps of the relit frames (on lavapipe they can miss \
          compute work: trust the wall time there)",
         o.frames,
         if o.frames == 1 { "" } else { "s" },
         o.warmup,
         if o.warmup == 1 { "" } else { "s" },
+        o.accumulate,
         o.orbit_deg,
         super::ORBIT_FRAMES
     );

@@ -31,6 +31,15 @@ pub fn variant(shader: &str, paper: bool) -> String {
     }
 }
 
+/// The shadow maps the voxels are lit through: the punctual lights' array, the area lights', and
+/// their comparison sampler.
+#[derive(Clone, Copy)]
+pub struct ShadowMapsIn<'a> {
+    pub map: &'a Image,
+    pub area_map: &'a Image,
+    pub sampler: &'a Sampler,
+}
+
 pub struct Inject {
     pass: Pass,
 }
@@ -40,11 +49,12 @@ impl Inject {
         ctx: &Arc<Context>,
         scene: &SharedSet,
         volumes: &Volumes,
-        shadow_map: (&Image, &Sampler),
+        shadow_maps: ShadowMapsIn,
         paper: bool,
     ) -> VkResult<Inject> {
         let table = read_voxel_data(Bindings::new(), volumes)
-            .sampled("shadow_map", shadow_map.0, shadow_map.1)
+            .sampled("shadow_map", shadow_maps.map, shadow_maps.sampler)
+            .sampled("area_shadow_map", shadow_maps.area_map, shadow_maps.sampler)
             .image("radiance", &volumes.radiance, Usage::Write)
             .with(volumes.emit_dir.as_ref(), |t, d| {
                 t.image("emit_dir", d, Usage::Write)

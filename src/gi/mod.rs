@@ -14,14 +14,12 @@ pub use readback::{NonFinite, VoxelDump};
 pub use volumes::{VolumeInfo, Volumes};
 
 use crate::scene::Aabb;
-use crate::vk::{
-    vk, Access, Buffer, Context, Graph, Image, Pipeline, Sampler, SharedSet, VertexLayout, VkResult,
-};
+use crate::vk::{vk, Access, Buffer, Context, Graph, Pipeline, SharedSet, VertexLayout, VkResult};
 use glam::{Vec3, Vec4};
 use std::sync::Arc;
 
 pub use bounce::Bounce;
-pub use inject::Inject;
+pub use inject::{Inject, ShadowMapsIn};
 pub use mip::Mip;
 pub use trace::{FrameImages, Trace, TraceFrame, TraceLayout, TraceMode, GBUFFER_NAMES};
 pub use voxelize::{Voxelizer, EMITTER_LIGHT};
@@ -550,7 +548,7 @@ pub struct GiInputs<'a> {
     pub scene: &'a SharedSet,
     /// The materials' sets (set 1 of voxelization).
     pub materials: &'a SharedSet,
-    pub shadow_map: (&'a Image, &'a Sampler),
+    pub shadow_maps: ShadowMapsIn<'a>,
     pub frame: FrameImages<'a>,
     /// The scene's vertices as voxelization reads them, and each draw's push constants.
     pub vertices: VertexLayout<'a>,
@@ -594,7 +592,7 @@ impl Gi {
         )?;
         let lighting = if light_voxels {
             Some((
-                Inject::new(ctx, scene_set, &volumes, inputs.shadow_map, paper)?,
+                Inject::new(ctx, scene_set, &volumes, inputs.shadow_maps, paper)?,
                 Mip::new(ctx, &volumes, paper)?,
             ))
         } else {

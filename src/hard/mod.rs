@@ -250,6 +250,8 @@ impl Env {
             shadow_resolution: 512,
             gi: gi.clone(),
             dynamic_nodes,
+            // The second frame is the one shown: one sample per pixel, as the first.
+            accumulate: 1,
             ..RenderSettings::default()
         };
         let mut r = Renderer::new(&self.ctx, scene, settings)?;

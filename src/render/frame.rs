@@ -28,12 +28,20 @@ pub struct FrameTargets {
     pub depth: Image,
     /// Linear radiance (RGBA32F), which lighting writes and the trace adds to.
     pub hdr: Image,
+    /// The mean of the frames' radiance (accumulate.rs), when frames are accumulated.
+    pub history: Option<Image>,
     /// Its host copy, after a frame rendered with readback.
     pub readback: Buffer,
 }
 
 impl FrameTargets {
-    pub fn new(ctx: &Arc<Context>, width: u32, height: u32) -> VkResult<FrameTargets> {
+    /// The frame's images; with `accumulate`, the mean of the frames' radiance too.
+    pub fn new(
+        ctx: &Arc<Context>,
+        width: u32,
+        height: u32,
+        accumulate: bool,
+    ) -> VkResult<FrameTargets> {
         let (w, h) = (width, height);
         let gbuffer = GBUFFER_FORMATS
             .iter()
@@ -71,6 +79,20 @@ impl FrameTargets {
                 vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
             ),
         )?;
+        let history = if accumulate {
+            Some(Image::new(
+                ctx,
+                "radiance mean",
+                ImageDesc::d2(
+                    vk::Format::R32G32B32A32_SFLOAT,
+                    w,
+                    h,
+                    vk::ImageUsageFlags::STORAGE,
+                ),
+            )?)
+        } else {
+            None
+        };
         let readback = Buffer::readback(ctx, "radiance readback", (w * h * 16) as u64)?;
         Ok(FrameTargets {
             width,
@@ -78,13 +100,15 @@ impl FrameTargets {
             gbuffer,
             depth,
             hdr,
+            history,
             readback,
         })
     }
 
     /// Forgets the targets' tracked states (they are about to be freed).
     pub fn forget(&self, states: &mut ResourceStates) {
-        for img in self.gbuffer.iter().chain([&self.depth, &self.hdr]) {
+        let images = [&self.depth, &self.hdr].into_iter().chain(&self.history);
+        for img in self.gbuffer.iter().chain(images) {
             states.forget(img.raw);
         }
         states.forget(self.readback.raw);

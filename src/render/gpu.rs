@@ -20,6 +20,9 @@ pub struct FrameUniforms {
     pub counts: [u32; 4],
     /// shadow-map resolution, normal offset in texels, PCF radius in texels, unused
     pub shadow: Vec4,
+    /// the area lights' shadow-map resolution, their first view, the widest soft-shadow
+    /// filter's half width in texels, unused
+    pub area_shadow: Vec4,
     /// voxel grid origin, edge length
     pub grid: Vec4,
     /// resolution, bounces, diffuse cone count, flags
@@ -255,6 +258,7 @@ mod tests {
                 eye,
                 counts,
                 shadow,
+                area_shadow,
                 grid,
                 grid_info,
                 cone,

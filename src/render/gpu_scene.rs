@@ -31,6 +31,8 @@ pub struct GpuScene {
     pub samplers: Vec<Sampler>,
     pub light_views: Vec<LightViews>,
     pub shadow_view_count: u32,
+    /// The scene's punctual lights' views (the area lights' follow them).
+    pub punctual_view_count: u32,
 }
 
 /// The lights, their shadow views and the area lights' shapes (host-visible: rewritten when an
@@ -133,20 +135,28 @@ impl LightTable {
     }
 }
 
+/// Texels per side of the punctual lights' shadow views and of the area lights'.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadowResolution {
+    pub punctual: u32,
+    pub area: u32,
+}
+
 /// The scene's lights in order, then the area lights (each seen from its centre through six
-/// views, widened for the softest shadow's filter: shadows::SOFT_SHADOW_SHARE).
+/// views of `resolution.area` texels, widened for the softest shadow's filter:
+/// shadows::SOFT_SHADOW_SHARE).
 pub fn light_table(
     lights: &[Light],
     area: &[AreaLight],
     bounds: &Aabb,
-    shadow_resolution: u32,
+    resolution: ShadowResolution,
     pcf_radius: u32,
 ) -> LightTable {
-    let mut views = light_views(lights, bounds, shadow_resolution, pcf_radius);
+    let mut views = light_views(lights, bounds, resolution.punctual, pcf_radius);
     let points: Vec<Light> = area.iter().map(AreaLight::as_point_light).collect();
     let first = views.iter().map(|v| v.views.len() as u32).sum::<u32>();
-    let soft = soft_shadow_texels(shadow_resolution).max(pcf_radius);
-    let mut area_views = light_views(&points, bounds, shadow_resolution, soft);
+    let soft = soft_shadow_texels(resolution.area).max(pcf_radius);
+    let mut area_views = light_views(&points, bounds, resolution.area, soft);
     for v in &mut area_views {
         v.first += first;
     }
@@ -404,7 +414,7 @@ impl GpuScene {
         scene: &Scene,
         states: &mut ResourceStates,
         area_lights: &[AreaLight],
-        shadow_resolution: u32,
+        shadow_resolution: ShadowResolution,
         pcf_radius: u32,
     ) -> VkResult<GpuScene> {
         let usage_dst = vk::BufferUsageFlags::TRANSFER_DST;
@@ -525,6 +535,10 @@ impl GpuScene {
             texture_samplers,
             samplers,
             shadow_view_count: table.views.iter().map(|v| v.views.len() as u32).sum(),
+            punctual_view_count: table.views[..scene.lights.len()]
+                .iter()
+                .map(|v| v.views.len() as u32)
+                .sum(),
             light_views: table.views,
         })
     }

@@ -4,8 +4,9 @@
 
 use super::frame::FrameTargets;
 use super::scene_set::SceneBindings;
+use super::shadow_maps::ShadowMaps;
 use crate::gi::GBUFFER_NAMES;
-use crate::vk::{vk, Bindings, Context, Graph, Image, Pass, Sampler, Usage, VkResult};
+use crate::vk::{vk, Bindings, Context, Graph, Pass, Sampler, Usage, VkResult};
 use std::sync::Arc;
 
 pub struct LightingPass {
@@ -13,7 +14,7 @@ pub struct LightingPass {
 }
 
 /// The frame's images the pass reads and writes, and the shadow maps it samples.
-fn table(targets: &FrameTargets, nearest: &Sampler, shadow: (&Image, &Sampler)) -> Bindings {
+fn table(targets: &FrameTargets, nearest: &Sampler, shadow: &ShadowMaps) -> Bindings {
     targets
         .gbuffer
         .iter()
@@ -21,8 +22,9 @@ fn table(targets: &FrameTargets, nearest: &Sampler, shadow: (&Image, &Sampler)) 
         .fold(Bindings::new(), |t, (img, name)| {
             t.sampled(name, img, nearest)
         })
-        .sampled("shadow_map", shadow.0, shadow.1)
-        .sampled("shadow_depth", shadow.0, nearest)
+        .sampled("shadow_map", &shadow.map, &shadow.sampler)
+        .sampled("area_shadow_map", &shadow.area_map, &shadow.sampler)
+        .sampled("area_shadow_depth", &shadow.area_map, nearest)
         .image("out_radiance", &targets.hdr, Usage::Write)
 }
 
@@ -32,7 +34,7 @@ impl LightingPass {
         sets: &SceneBindings,
         targets: &FrameTargets,
         nearest: &Sampler,
-        shadow: (&Image, &Sampler),
+        shadow: &ShadowMaps,
     ) -> VkResult<LightingPass> {
         let table = table(targets, nearest, shadow);
         let pass = Pass::compute(ctx, "deferred_lighting.comp", &[&sets.scene], table, 0)?;
@@ -46,7 +48,7 @@ impl LightingPass {
         sets: &SceneBindings,
         targets: &FrameTargets,
         nearest: &Sampler,
-        shadow: (&Image, &Sampler),
+        shadow: &ShadowMaps,
     ) -> VkResult<()> {
         let table = table(targets, nearest, shadow);
         self.pass.rebind(ctx, 0, table, &[&sets.scene])

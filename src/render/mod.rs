@@ -1,6 +1,7 @@
 //! The renderer: shadow maps, G-buffer and deferred lighting, recorded as declared passes, and
 //! the voxel passes of crate::gi, composed by `Renderer`.
 
+mod accumulate;
 pub mod area_lights;
 mod frame;
 mod gbuffer;

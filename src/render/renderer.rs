@@ -2,16 +2,19 @@
 //! targets, the shadow maps, the G-buffer and lighting passes, the instances and their motion,
 //! and the voxel passes (crate::gi); each frame records the steps its state calls for.
 
+use super::accumulate::{self, Accumulate};
 use super::area_lights::{self, AreaLight};
 use super::frame::FrameTargets;
 use super::gbuffer::GBufferPass;
 use super::gpu::FrameUniforms;
-use super::gpu_scene::{light_table, GpuScene};
+use super::gpu_scene::{light_table, GpuScene, ShadowResolution};
 use super::instances::{self, Instances, SceneDraw, DRAW_PUSH_SIZE, NORMAL, POSITION, UV};
 use super::lighting::LightingPass;
 use super::scene_set::SceneBindings;
-use super::shadow_maps::ShadowMaps;
-use crate::gi::{Dirty, FrameImages, Gi, GiInputs, GiSettings, StepInputs, TraceFrame, TraceMode};
+use super::shadow_maps::{ShadowLayout, ShadowMaps};
+use crate::gi::{
+    Dirty, FrameImages, Gi, GiInputs, GiSettings, ShadowMapsIn, StepInputs, TraceFrame, TraceMode,
+};
 use crate::scene::{Aabb, Camera, Light, Scene};
 use crate::vk::{
     vk, CommandPool, Context, Graph, Image, PassTimer, Pipeline, ResourceStates, Sampler, VkError,
@@ -115,6 +118,9 @@ pub enum Step {
     TraceUnmatched,
     /// The first voxel along each camera ray (the voxel modes).
     VoxelView,
+    /// The radiance blended into the mean of the frames since the view last changed
+    /// (antialiasing: accumulate.rs).
+    Accumulate,
     /// The radiance image copied to host memory.
     Readback,
 }
@@ -130,6 +136,7 @@ impl Step {
             Step::Trace => "trace".into(),
             Step::TraceUnmatched => "trace unmatched".into(),
             Step::VoxelView => "voxel view".into(),
+            Step::Accumulate => "accumulate".into(),
             Step::Readback => "readback".into(),
         }
     }
@@ -140,8 +147,10 @@ pub struct RenderSettings {
     pub width: u32,
     pub height: u32,
     pub mode: Mode,
-    /// Texels per side of each shadow-map view.
+    /// Texels per side of each punctual light's shadow-map views.
     pub shadow_resolution: u32,
+    /// Texels per side of each area light's shadow-map views (soft shadows: coarser).
+    pub area_shadow_resolution: u32,
     /// PCF kernel radius in texels (a (2r+1)^2 grid of bilinear comparisons).
     pub pcf_radius: u32,
     /// Normal offset of shadow lookups, in texels.
@@ -153,6 +162,19 @@ pub struct RenderSettings {
     pub mip: Option<u32>,
     /// Nodes that move between frames: voxelized every frame, apart from the static voxels.
     pub dynamic_nodes: Vec<usize>,
+    /// Antialiasing: while the view holds still, the frames are drawn at sub-pixel offsets and
+    /// the image is the mean of the first this many (later frames show it). 0 or 1: off,
+    /// every pixel one sample at its centre.
+    pub accumulate: u32,
+}
+
+impl RenderSettings {
+    pub fn shadow_resolutions(&self) -> ShadowResolution {
+        ShadowResolution {
+            punctual: self.shadow_resolution,
+            area: self.area_shadow_resolution,
+        }
+    }
 }
 
 impl Default for RenderSettings {
@@ -162,12 +184,14 @@ impl Default for RenderSettings {
             height: 512,
             mode: Mode::Full,
             shadow_resolution: 2048,
+            area_shadow_resolution: 512,
             pcf_radius: 1,
             normal_offset: 1.5,
             timings: false,
             gi: GiSettings::default(),
             mip: None,
             dynamic_nodes: Vec::new(),
+            accumulate: 8,
         }
     }
 }
@@ -210,6 +234,11 @@ pub struct Renderer {
     prev_view_proj: Mat4,
     /// The next frame drops the temporal trace's history.
     history_reset: bool,
+    /// Antialiasing: the mean's pass (None when off), the frames in the mean so far, and the
+    /// unjittered camera of the last frame (another one starts the mean again).
+    accumulate: Option<Accumulate>,
+    mean_frames: u32,
+    mean_camera: Mat4,
     ctx: Arc<Context>,
 }
 
@@ -226,22 +255,31 @@ impl Renderer {
             scene,
             &mut states,
             &area_lights,
-            settings.shadow_resolution,
+            settings.shadow_resolutions(),
             settings.pcf_radius,
         )?;
         let instances = Instances::new(scene, &settings.dynamic_nodes);
         let sets = SceneBindings::new(ctx, scene, &gpu)?;
-        let targets = FrameTargets::new(ctx, settings.width, settings.height)?;
+        let targets = FrameTargets::new(
+            ctx,
+            settings.width,
+            settings.height,
+            settings.accumulate > 1,
+        )?;
+        let accumulate = Accumulate::new(ctx, &targets)?;
         let nearest = nearest_sampler(ctx)?;
         let shadows = ShadowMaps::new(
             ctx,
             &sets,
-            gpu.shadow_view_count,
-            settings.shadow_resolution,
+            ShadowLayout {
+                views: gpu.punctual_view_count,
+                resolution: settings.shadow_resolution,
+                area_views: gpu.shadow_view_count - gpu.punctual_view_count,
+                area_resolution: settings.area_shadow_resolution,
+            },
         )?;
         let gbuffer = GBufferPass::new(ctx, &sets)?;
-        let shadow = (&shadows.map, &shadows.sampler);
-        let lighting = LightingPass::new(ctx, &sets, &targets, &nearest, shadow)?;
+        let lighting = LightingPass::new(ctx, &sets, &targets, &nearest, &shadows)?;
         let lit: Vec<(usize, f32)> = area_lights
             .iter()
             .map(|e| (e.instance, e.emission.max_element()))
@@ -250,7 +288,11 @@ impl Renderer {
             let inputs = GiInputs {
                 scene: &sets.scene,
                 materials: &sets.materials,
-                shadow_map: shadow,
+                shadow_maps: ShadowMapsIn {
+                    map: &shadows.map,
+                    area_map: &shadows.area_map,
+                    sampler: &shadows.sampler,
+                },
                 frame: FrameImages {
                     size: (settings.width, settings.height),
                     gbuffer: &targets.gbuffer,
@@ -308,6 +350,9 @@ impl Renderer {
             history_frames: 0,
             prev_view_proj: Mat4::IDENTITY,
             history_reset: true,
+            accumulate,
+            mean_frames: 0,
+            mean_camera: Mat4::IDENTITY,
             settings,
             ctx: ctx.clone(),
         })
@@ -325,11 +370,22 @@ impl Renderer {
         (self.camera.view(), proj)
     }
 
+    /// The camera's sub-pixel shift this frame, in clip space (antialiasing: the mean's
+    /// frames sample the pixels' footprints).
+    fn jitter(&self) -> Mat4 {
+        if self.accumulate.is_none() {
+            return Mat4::IDENTITY;
+        }
+        let (w, h) = (self.settings.width as f32, self.settings.height as f32);
+        let o = accumulate::jitter(self.mean_frames);
+        Mat4::from_translation(glam::Vec3::new(2.0 * o.x / w, 2.0 * o.y / h, 0.0))
+    }
+
     fn uniforms(&self) -> FrameUniforms {
         let (w, h) = (self.settings.width, self.settings.height);
         let (view, proj) = self.view_proj();
         let mut u = FrameUniforms {
-            view_proj: proj * view,
+            view_proj: self.jitter() * proj * view,
             view,
             proj,
             eye: self.camera.eye().extend(1.0),
@@ -343,7 +399,13 @@ impl Renderer {
                 self.settings.shadow_resolution as f32,
                 self.settings.normal_offset,
                 self.settings.pcf_radius as f32,
-                super::shadows::soft_shadow_texels(self.settings.shadow_resolution) as f32,
+                0.0,
+            ),
+            area_shadow: Vec4::new(
+                self.settings.area_shadow_resolution as f32,
+                self.gpu.punctual_view_count as f32,
+                super::shadows::soft_shadow_texels(self.settings.area_shadow_resolution) as f32,
+                0.0,
             ),
             ..Default::default()
         };
@@ -393,12 +455,19 @@ impl Renderer {
         signals: &[vk::SemaphoreSubmitInfo],
         after: &mut dyn FnMut(&mut Graph),
     ) -> VkResult<()> {
-        let uniforms = self.uniforms();
-        self.sets.write_uniforms(&uniforms);
         // The light in the voxels changes this frame: the temporal history is stale.
         if self.gi.as_ref().is_some_and(|gi| gi.dirty != Dirty::NONE) {
             self.history_reset = true;
         }
+        // Anything that changes the image starts the antialiasing mean again: the camera, the
+        // light (shadows or voxels), a cut, a resize (set_node_transform: a node).
+        let (view, proj) = self.view_proj();
+        let camera = proj * view;
+        if self.history_reset || self.shadows.any_dirty() || camera != self.mean_camera {
+            self.mean_frames = 0;
+        }
+        let uniforms = self.uniforms();
+        self.sets.write_uniforms(&uniforms);
         // A history that starts over traces the subsets from the first again: the same frames
         // give the same images however many came before.
         if self.history_reset {
@@ -431,6 +500,8 @@ impl Renderer {
         self.history_frames += 1;
         self.prev_view_proj = uniforms.view_proj;
         self.history_reset = false;
+        self.mean_frames = self.mean_frames.saturating_add(1);
+        self.mean_camera = camera;
         // The voxels now hold the geometry and its light until a node or a light moves.
         if let Some(gi) = self.gi.as_mut() {
             gi.mark_clean();
@@ -468,6 +539,9 @@ impl Renderer {
             } else {
                 steps.push(Step::VoxelView);
             }
+        }
+        if self.accumulate.is_some() && mode.shades_pixels() {
+            steps.push(Step::Accumulate);
         }
         if readback {
             steps.push(Step::Readback);
@@ -526,6 +600,12 @@ impl Renderer {
             Step::Gather => self.record_gather(g, &name),
             Step::Trace | Step::VoxelView => self.record_trace(g, &name),
             Step::TraceUnmatched => self.record_trace_unmatched(g, &name),
+            Step::Accumulate => {
+                if let Some(a) = &self.accumulate {
+                    let w = accumulate::weight(self.mean_frames, self.settings.accumulate);
+                    a.record(ctx, g, &name, targets, w);
+                }
+            }
             Step::Readback => targets.record_readback(ctx, g, &name),
         }
     }
@@ -623,6 +703,9 @@ impl Renderer {
     /// it moves through. Setting the transform it has changes nothing.
     pub fn set_node_transform(&mut self, node: usize, world: Mat4) {
         let moved = self.instances.move_node(node, world);
+        if !moved.is_empty() {
+            self.mean_frames = 0;
+        }
         for m in &moved {
             // Where it was and where it goes: the views that see either draw again.
             let views = self.gpu.light_views.iter().flat_map(|l| &l.views);
@@ -669,7 +752,7 @@ impl Renderer {
             &self.lights,
             &self.area_lights,
             &self.bounds,
-            self.settings.shadow_resolution,
+            self.settings.shadow_resolutions(),
             self.settings.pcf_radius,
         );
         self.gpu.lights.write(&table);
@@ -682,11 +765,18 @@ impl Renderer {
         if (width, height) == (self.settings.width, self.settings.height) {
             return Ok(());
         }
-        let targets = FrameTargets::new(&self.ctx, width, height)?;
+        let targets = FrameTargets::new(&self.ctx, width, height, self.accumulate.is_some())?;
         // Every frame before was waited for: the sets are not in use.
-        let shadow = (&self.shadows.map, &self.shadows.sampler);
-        self.lighting
-            .retarget(&self.ctx, &self.sets, &targets, &self.nearest, shadow)?;
+        self.lighting.retarget(
+            &self.ctx,
+            &self.sets,
+            &targets,
+            &self.nearest,
+            &self.shadows,
+        )?;
+        if let Some(a) = &mut self.accumulate {
+            a.retarget(&self.ctx, &targets)?;
+        }
         if let Some(gi) = &mut self.gi {
             let frame = FrameImages {
                 size: (width, height),

@@ -1,5 +1,8 @@
 //! The shadow maps: one depth layer per light view (shadows.rs fits the views), drawn again
-//! only where a light or a caster moved (glsl/shadow.vert, glsl/shadow.frag).
+//! only where a light or a caster moved (glsl/shadow.vert, glsl/shadow.frag). The punctual
+//! lights' views and the area lights' views are two arrays of their own resolutions: an area
+//! light's shadows are soft, and a coarser map gives the same penumbrae for a sixteenth of the
+//! texels to draw and to filter.
 
 use super::frame::DEPTH_FORMAT;
 use super::instances::{self, SceneDraw, DRAW_PUSH_SIZE, POSITION, UV};
@@ -11,37 +14,61 @@ use crate::vk::{
 };
 use std::sync::Arc;
 
+/// How many views of each kind, and their resolutions (texels per side).
+#[derive(Clone, Copy, Debug)]
+pub struct ShadowLayout {
+    /// The punctual lights' views: layers 0.. of `map`, views 0.. of the light table.
+    pub views: u32,
+    pub resolution: u32,
+    /// The area lights' views: layers 0.. of `area_map`, views `views`.. of the light table.
+    pub area_views: u32,
+    pub area_resolution: u32,
+}
+
 pub struct ShadowMaps {
-    /// One layer per view; a 1x1 stand-in when nothing casts shadows (the shaders sample an
-    /// array either way).
+    /// One layer per punctual light view; a 1x1 stand-in when there is none (the shaders
+    /// sample an array either way).
     pub map: Image,
+    /// One layer per area light view (or the stand-in).
+    pub area_map: Image,
     /// Hardware comparison with bilinear filtering: each tap is already a 2x2 PCF.
     pub sampler: Sampler,
     pass: Pass,
-    resolution: u32,
-    /// Per view: it must be drawn (first frame, its light moved, or a node moved through it).
+    pub layout: ShadowLayout,
+    /// Per view, punctual then area: it must be drawn (first frame, its light moved, or a node
+    /// moved through it).
     pub dirty: Vec<bool>,
+}
+
+/// A depth array of `views` layers of `resolution` texels per side, or a 1x1 stand-in.
+fn depth_array(ctx: &Arc<Context>, name: &str, views: u32, resolution: u32) -> VkResult<Image> {
+    let side = if views > 0 { resolution } else { 1 };
+    Image::new(
+        ctx,
+        name,
+        ImageDesc::d2(
+            DEPTH_FORMAT,
+            side,
+            side,
+            vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
+        )
+        .layers(views.max(1)),
+    )
 }
 
 impl ShadowMaps {
     pub fn new(
         ctx: &Arc<Context>,
         sets: &SceneBindings,
-        views: u32,
-        resolution: u32,
+        layout: ShadowLayout,
     ) -> VkResult<ShadowMaps> {
         // Only the views the lights need.
-        let side = if views > 0 { resolution } else { 1 };
-        let map = Image::new(
+        let map = depth_array(ctx, "shadow maps", layout.views, layout.resolution)?;
+        let area_map = depth_array(
             ctx,
-            "shadow maps",
-            ImageDesc::d2(
-                DEPTH_FORMAT,
-                side,
-                side,
-                vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT | vk::ImageUsageFlags::SAMPLED,
-            )
-            .layers(views.max(1)),
+            "area light shadow maps",
+            layout.area_views,
+            layout.area_resolution,
         )?;
         let sampler = Sampler::new(
             ctx,
@@ -70,10 +97,11 @@ impl ShadowMaps {
         let pass = Pass::new(ctx, program, &shared, vec![Bindings::new()], DRAW_PUSH_SIZE)?;
         Ok(ShadowMaps {
             map,
+            area_map,
             sampler,
             pass,
-            resolution,
-            dirty: vec![true; views as usize],
+            layout,
+            dirty: vec![true; (layout.views + layout.area_views) as usize],
         })
     }
 
@@ -92,14 +120,20 @@ impl ShadowMaps {
         hides: impl Fn(usize, u32) -> bool,
     ) {
         let d = &ctx.device;
-        let res = self.resolution;
+        let l = self.layout;
         let pass = scene
             .declare(self.pass.declare(g.pass(name), 0))
-            .image(&self.map, Access::DepthAttachmentWrite);
+            .image(&self.map, Access::DepthAttachmentWrite)
+            .image(&self.area_map, Access::DepthAttachmentWrite);
         pass.record(|cmd| {
             for (view, _) in self.dirty.iter().enumerate().filter(|(_, &d)| d) {
                 let view = view as u32;
-                let depth = cleared_depth(self.map.layer_view(view), vk::AttachmentStoreOp::STORE);
+                let (layer, res) = if view < l.views {
+                    (self.map.layer_view(view), l.resolution)
+                } else {
+                    (self.area_map.layer_view(view - l.views), l.area_resolution)
+                };
+                let depth = cleared_depth(layer, vk::AttachmentStoreOp::STORE);
                 let info = vk::RenderingInfo::default()
                     .render_area(area(res, res))
                     .layer_count(1)
