@@ -138,3 +138,63 @@ fn spot_light_falloff_between_cone_angles() {
         "{n} pixels, {in_falloff} in the falloff"
     );
 }
+
+/// A floor under `count` lights of `kind`, each dim enough that the sum stays moderate.
+fn many_lights(kind: LightKind, count: usize) -> voxgi::scene::Scene {
+    let mut s = empty_scene();
+    let white = lambert(&mut s, Vec3::splat(0.8));
+    floor(&mut s, 2.0, white);
+    top_camera(&mut s, 3.0, 60.0);
+    for i in 0..count {
+        let a = i as f32 * 0.37;
+        s.lights.push(light(
+            kind,
+            Vec3::splat(0.01),
+            Vec3::new(a.cos(), 2.0, a.sin()),
+            Vec3::new(0.1 * a.cos(), -1.0, 0.1 * a.sin()),
+        ));
+    }
+    s
+}
+
+#[test]
+fn the_light_and_shadow_view_caps_are_reached_cleanly_and_refused_beyond() {
+    // The lights and shadow views are uniform blocks of 256 lights and 819 views: at the caps
+    // the scene renders (validation-clean, finite, lit); one more is a clear error, not a
+    // truncated table.
+    let small = || RenderSettings {
+        width: 32,
+        height: 32,
+        shadow_resolution: 16,
+        ..settings()
+    };
+    for (kind, count) in [(LightKind::Directional, 256), (LightKind::Point, 136)] {
+        let img = render(&many_lights(kind, count), small());
+        assert!(
+            !img.has_non_finite(),
+            "{count} {kind:?} lights: non-finite pixels"
+        );
+        assert!(
+            img.pixels.iter().any(|p| p[0] > 0.0),
+            "{count} {kind:?} lights: the floor is dark"
+        );
+    }
+    let ctx = context();
+    let refused = |kind: LightKind, count: usize| {
+        let err = voxgi::render::Renderer::new(&ctx, &many_lights(kind, count), small())
+            .err()
+            .unwrap_or_else(|| panic!("{count} {kind:?} lights were accepted"));
+        err.to_string()
+    };
+    let lights = refused(LightKind::Directional, 257);
+    assert!(
+        lights.contains("257 lights") && lights.contains("at most 256"),
+        "{lights}"
+    );
+    // 137 point lights: 822 views.
+    let views = refused(LightKind::Point, 137);
+    assert!(
+        views.contains("822 shadow views") && views.contains("at most 819"),
+        "{views}"
+    );
+}

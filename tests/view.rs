@@ -138,6 +138,9 @@ fn cornell_box_original_spins_resizes_and_matches_render() {
     // every frame; the window is resized twice on the way.
     let common = [
         scene,
+        // A moving scene: the window shows one sample per pixel, render the mean.
+        "--accumulate",
+        "1",
         "--width",
         "128",
         "--height",
@@ -286,6 +289,9 @@ fn sponza_with_a_spinning_cube_resizes_and_matches_render() {
     let scene = scene.to_str().unwrap();
     let common = [
         scene,
+        // A moving scene: the window shows one sample per pixel, render the mean.
+        "--accumulate",
+        "1",
         "--width",
         "128",
         "--height",
@@ -318,10 +324,35 @@ fn sponza_with_a_spinning_cube_resizes_and_matches_render() {
 }
 
 #[test]
+fn a_still_window_shows_renders_antialiasing_mean() {
+    // Nothing moves: after the 8 frames of the mean the window holds it, which is what
+    // `render` writes by default (its 8 frames).
+    let common = ["--width", "96", "--height", "96", "--shadow-res", "256"];
+    let (flip, shot, _) = window_against_render("still-mean", &common, &["--frames", "12"], &[]);
+    assert_shows_something(&shot, "screenshot");
+    // Measured: 0 (the same bytes).
+    assert!(flip == 0.0, "FLIP {flip}");
+    // One sample per pixel differs from it (the edges): the comparison can tell.
+    let (one, _, _) = window_against_render(
+        "still-one",
+        &common,
+        &["--frames", "12", "--accumulate", "1"],
+        &[],
+    );
+    assert!(
+        one > flip,
+        "FLIP with one sample {one}, with the mean {flip}"
+    );
+}
+
+#[test]
 fn keys_change_mode_bounces_and_voxels_as_the_command_line_would() {
     // The bundled Cornell box: 3 is the indirect mode, B three bounces, Shift+V halves the
     // voxels (64 -> 32); the tall box turns meanwhile (a quarter turn per second).
     let common = [
+        // A moving scene: the window shows one sample per pixel, render the mean.
+        "--accumulate",
+        "1",
         "--width",
         "96",
         "--height",
@@ -386,6 +417,9 @@ fn animations_play_in_the_window_as_render_poses_them() {
     let scene = scene.to_str().unwrap();
     let common = [
         scene,
+        // A moving scene: the window shows one sample per pixel, render the mean.
+        "--accumulate",
+        "1",
         "--width",
         "64",
         "--height",
