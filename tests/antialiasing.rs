@@ -7,9 +7,8 @@ mod gpu;
 use glam::{Mat4, Vec3};
 use gpu::*;
 use voxgi::gi::GiSettings;
-use voxgi::metrics;
 use voxgi::output::RadianceImage;
-use voxgi::render::{Mode, RenderSettings, Renderer};
+use voxgi::render::{Mode, RenderSettings};
 use voxgi::scene::{LightKind, Scene};
 
 const SIZE: u32 = 64;
@@ -79,33 +78,6 @@ fn scene() -> Scene {
         60.0,
     );
     s
-}
-
-/// `n` frames, then `between`, then `after` more; the last image. Fails on validation messages
-/// and non-finite pixels.
-fn frames(
-    scene: &Scene,
-    settings: RenderSettings,
-    n: u32,
-    between: impl FnOnce(&mut Renderer),
-    after: u32,
-) -> RadianceImage {
-    let img = render_with(scene, settings, |r| {
-        for _ in 0..n {
-            r.render(false).expect("frame");
-        }
-        between(r);
-        for _ in 0..after {
-            r.render(false).expect("frame");
-        }
-        r.render(true).expect("frame");
-    });
-    assert!(!img.has_non_finite(), "non-finite pixels");
-    img
-}
-
-fn rel_mse(a: &RadianceImage, b: &RadianceImage) -> f64 {
-    metrics::try_compare(a, b, 0.0).expect("same size").rel_mse
 }
 
 /// The mean of each k x k block of pixels.

@@ -7,9 +7,8 @@ mod gpu;
 use glam::{Mat4, Vec3};
 use gpu::*;
 use voxgi::gi::GiSettings;
-use voxgi::metrics;
 use voxgi::output::RadianceImage;
-use voxgi::render::{Mode, RenderSettings, Renderer};
+use voxgi::render::{Mode, RenderSettings};
 use voxgi::scene::{LightKind, Scene};
 
 const SIZE: u32 = 128;
@@ -127,33 +126,6 @@ fn edges_scene() -> Scene {
         60.0,
     );
     s
-}
-
-/// Renders `frames` frames under validation, then calls `between` once and renders `after`
-/// more; returns the last image. Fails on validation messages and non-finite pixels.
-fn frames(
-    scene: &Scene,
-    settings: RenderSettings,
-    frames: u32,
-    between: impl FnOnce(&mut Renderer),
-    after: u32,
-) -> RadianceImage {
-    let img = render_with(scene, settings, |r| {
-        for _ in 0..frames {
-            r.render(false).expect("frame");
-        }
-        between(r);
-        for _ in 0..after {
-            r.render(false).expect("frame");
-        }
-        r.render(true).expect("frame");
-    });
-    assert!(!img.has_non_finite(), "non-finite pixels");
-    img
-}
-
-fn rel_mse(a: &RadianceImage, b: &RadianceImage) -> f64 {
-    metrics::try_compare(a, b, 0.0).expect("same size").rel_mse
 }
 
 /// Per pixel, |a - b| over the pixel's own (full-resolution) brightness, its largest channel.

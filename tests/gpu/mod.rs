@@ -208,6 +208,36 @@ pub fn render_with(
     img
 }
 
+/// Renders `n` frames under validation, then calls `between` once and renders `after` more;
+/// returns the last image. Fails on validation messages and non-finite pixels.
+pub fn frames(
+    scene: &Scene,
+    settings: RenderSettings,
+    n: u32,
+    between: impl FnOnce(&mut Renderer),
+    after: u32,
+) -> RadianceImage {
+    let img = render_with(scene, settings, |r| {
+        for _ in 0..n {
+            r.render(false).expect("frame");
+        }
+        between(r);
+        for _ in 0..after {
+            r.render(false).expect("frame");
+        }
+        r.render(true).expect("frame");
+    });
+    assert!(!img.has_non_finite(), "non-finite pixels");
+    img
+}
+
+/// relMSE of `a` against `b` (same size).
+pub fn rel_mse(a: &RadianceImage, b: &RadianceImage) -> f64 {
+    voxgi::metrics::try_compare(a, b, 0.0)
+        .expect("same size")
+        .rel_mse
+}
+
 /// World position seen through pixel (x, y) on the plane y = 0, for `top_camera`.
 pub fn top_pixel_to_floor(x: u32, y: u32, w: u32, h: u32, height: f32, yfov_deg: f32) -> Vec3 {
     let t = (yfov_deg.to_radians() * 0.5).tan();
