@@ -74,7 +74,7 @@ pub struct GiSettings {
 impl Default for GiSettings {
     fn default() -> Self {
         GiSettings {
-            // From the Pareto fronts of README "Choosing the defaults": 128^3 is no more
+            // From the Pareto fronts of docs/defaults.md: 128^3 is no more
             // accurate than 64^3 for three times the time. The second bounce gains or holds on
             // every bench scene and the closed rooms of docs/hard-cases.md need it; it runs
             // only when a light or a node moves (a still frame only traces).
