@@ -9,7 +9,7 @@ use gpu::*;
 use voxgi::gi::GiSettings;
 use voxgi::output::RadianceImage;
 use voxgi::render::{Mode, RenderSettings};
-use voxgi::scene::{LightKind, Scene};
+use voxgi::scene::Scene;
 
 const SIZE: u32 = 64;
 
@@ -31,20 +31,7 @@ fn settings(mode: Mode, size: u32, accumulate: u32) -> RenderSettings {
 /// A lit floor and wall with a thin pole and a slanted box in front: silhouettes, a shadow
 /// edge and a pole narrower than a pixel at 64x64.
 fn scene() -> Scene {
-    let mut s = empty_scene();
-    let white = lambert(&mut s, Vec3::splat(0.8));
-    let red = lambert(&mut s, Vec3::new(0.8, 0.1, 0.1));
-    floor(&mut s, 2.0, red);
-    quad(
-        &mut s,
-        [
-            Vec3::new(-2.0, 0.0, -1.0),
-            Vec3::new(2.0, 0.0, -1.0),
-            Vec3::new(2.0, 2.0, -1.0),
-            Vec3::new(-2.0, 2.0, -1.0),
-        ],
-        white,
-    );
+    let (mut s, white) = corner_scene();
     // The pole: 1.5 cm wide, about a third of a pixel at 64x64.
     quad(
         &mut s,
@@ -64,18 +51,6 @@ fn scene() -> Scene {
         &mut s,
         [c(-0.3, 0.0), c(0.3, 0.0), c(0.3, 0.7), c(-0.3, 0.7)],
         white,
-    );
-    s.lights.push(light(
-        LightKind::Directional,
-        Vec3::splat(3.0),
-        Vec3::ZERO,
-        Vec3::new(-0.3, -1.0, -0.5),
-    ));
-    look_at(
-        &mut s,
-        Vec3::new(0.0, 1.2, 2.2),
-        Vec3::new(0.0, 0.5, -1.0),
-        60.0,
     );
     s
 }

@@ -9,7 +9,7 @@ use gpu::*;
 use voxgi::gi::GiSettings;
 use voxgi::output::RadianceImage;
 use voxgi::render::{Mode, RenderSettings};
-use voxgi::scene::{LightKind, Scene};
+use voxgi::scene::Scene;
 
 const SIZE: u32 = 128;
 
@@ -78,29 +78,7 @@ fn box_faces(s: &mut Scene, lo: Vec3, hi: Vec3, material: u32) -> usize {
 /// A red floor meeting a white wall at z = -1, lit by the sun, with a thin white pole (4 cm,
 /// about two pixels wide) standing in front of the wall, and a box on the floor.
 fn edges_scene() -> Scene {
-    let mut s = empty_scene();
-    let red = lambert(&mut s, Vec3::new(0.8, 0.1, 0.1));
-    let white = lambert(&mut s, Vec3::splat(0.8));
-    quad(
-        &mut s,
-        [
-            Vec3::new(-2.0, 0.0, 2.0),
-            Vec3::new(2.0, 0.0, 2.0),
-            Vec3::new(2.0, 0.0, -1.0),
-            Vec3::new(-2.0, 0.0, -1.0),
-        ],
-        red,
-    );
-    quad(
-        &mut s,
-        [
-            Vec3::new(-2.0, 0.0, -1.0),
-            Vec3::new(2.0, 0.0, -1.0),
-            Vec3::new(2.0, 2.0, -1.0),
-            Vec3::new(-2.0, 2.0, -1.0),
-        ],
-        white,
-    );
+    let (mut s, white) = corner_scene();
     box_faces(
         &mut s,
         Vec3::new(0.3, 0.0, -0.6),
@@ -112,18 +90,6 @@ fn edges_scene() -> Scene {
         Vec3::new(-0.9, 0.0, -0.2),
         Vec3::new(-0.4, 0.4, 0.3),
         white,
-    );
-    s.lights.push(light(
-        LightKind::Directional,
-        Vec3::splat(3.0),
-        Vec3::ZERO,
-        Vec3::new(-0.3, -1.0, -0.5),
-    ));
-    look_at(
-        &mut s,
-        Vec3::new(0.0, 1.2, 2.2),
-        Vec3::new(0.0, 0.5, -1.0),
-        60.0,
     );
     s
 }

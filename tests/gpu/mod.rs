@@ -208,6 +208,48 @@ pub fn render_with(
     img
 }
 
+/// A red floor (x -2 to 2, z -1 to 2) meeting a white wall 2 m high at z = -1, lit by a sun
+/// from above and the front, seen from (0, 1.2, 2.2) at 60 degrees: instances 0 (floor) and
+/// 1 (wall). Returns the scene and its white material for what is placed in front.
+pub fn corner_scene() -> (Scene, u32) {
+    let mut s = empty_scene();
+    let red = lambert(&mut s, Vec3::new(0.8, 0.1, 0.1));
+    let white = lambert(&mut s, Vec3::splat(0.8));
+    quad(
+        &mut s,
+        [
+            Vec3::new(-2.0, 0.0, 2.0),
+            Vec3::new(2.0, 0.0, 2.0),
+            Vec3::new(2.0, 0.0, -1.0),
+            Vec3::new(-2.0, 0.0, -1.0),
+        ],
+        red,
+    );
+    quad(
+        &mut s,
+        [
+            Vec3::new(-2.0, 0.0, -1.0),
+            Vec3::new(2.0, 0.0, -1.0),
+            Vec3::new(2.0, 2.0, -1.0),
+            Vec3::new(-2.0, 2.0, -1.0),
+        ],
+        white,
+    );
+    s.lights.push(light(
+        LightKind::Directional,
+        Vec3::splat(3.0),
+        Vec3::ZERO,
+        Vec3::new(-0.3, -1.0, -0.5),
+    ));
+    look_at(
+        &mut s,
+        Vec3::new(0.0, 1.2, 2.2),
+        Vec3::new(0.0, 0.5, -1.0),
+        60.0,
+    );
+    (s, white)
+}
+
 /// Renders `n` frames under validation, then calls `between` once and renders `after` more;
 /// returns the last image. Fails on validation messages and non-finite pixels.
 pub fn frames(
