@@ -81,18 +81,10 @@ impl Accumulate {
         targets: &FrameTargets,
         weight: f32,
     ) {
-        let d = &ctx.device;
         let (w, h) = (targets.width, targets.height);
-        let bytes: Vec<u8> = [w.to_le_bytes(), h.to_le_bytes(), weight.to_le_bytes()]
-            .iter()
-            .flatten()
-            .copied()
-            .collect();
-        self.pass.declare(g.pass(name), 0).record(|cmd| unsafe {
-            self.pass.bind(d, cmd, &[], 0);
-            self.pass.pipeline.push(d, cmd, &bytes);
-            d.cmd_dispatch(cmd, w.div_ceil(8), h.div_ceil(8), 1);
-        });
+        let push: Vec<u8> = [w.to_le_bytes(), h.to_le_bytes(), weight.to_le_bytes()].concat();
+        let groups = [w.div_ceil(8), h.div_ceil(8), 1];
+        self.pass.record_dispatch(ctx, g, name, &[], &push, groups);
     }
 }
 

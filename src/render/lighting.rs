@@ -62,11 +62,9 @@ impl LightingPass {
         targets: &FrameTargets,
         scene_set: vk::DescriptorSet,
     ) {
-        let d = &ctx.device;
         let (w, h) = (targets.width, targets.height);
-        self.pass.declare(g.pass(name), 0).record(|cmd| unsafe {
-            self.pass.bind(d, cmd, &[(0, scene_set)], 0);
-            d.cmd_dispatch(cmd, w.div_ceil(8), h.div_ceil(8), 1);
-        });
+        let groups = [w.div_ceil(8), h.div_ceil(8), 1];
+        self.pass
+            .record_dispatch(ctx, g, name, &[(0, scene_set)], &[], groups);
     }
 }

@@ -12,7 +12,7 @@
 //! with [`Bindings::reaches`]; a pass whose shaders use the table without declaring each of
 //! them fails when it is made.
 
-use super::graph::{Access, PassBuilder, Tracked};
+use super::graph::{Access, Graph, PassBuilder, Tracked};
 use super::pipeline::{
     self, DescriptorPool, GraphicsDesc, LayoutBinding, Pipeline, SetLayout, Shader,
 };
@@ -552,6 +552,27 @@ impl Pass {
             pass = pass.tracked(t, a);
         }
         pass
+    }
+
+    /// Records graph pass `name` as one compute dispatch of instance 0: its declared accesses,
+    /// the shared sets given, `push` (when not empty) and `groups` work groups.
+    pub fn record_dispatch(
+        &self,
+        ctx: &Context,
+        g: &mut Graph,
+        name: &str,
+        shared: &[(u32, vk::DescriptorSet)],
+        push: &[u8],
+        groups: [u32; 3],
+    ) {
+        let d = &ctx.device;
+        self.declare(g.pass(name), 0).record(|cmd| unsafe {
+            self.bind(d, cmd, shared, 0);
+            if !push.is_empty() {
+                self.pipeline.push(d, cmd, push);
+            }
+            d.cmd_dispatch(cmd, groups[0], groups[1], groups[2]);
+        });
     }
 
     /// Binds the pipeline, the shared sets given and instance `instance`'s own sets.
