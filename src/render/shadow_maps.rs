@@ -121,10 +121,15 @@ impl ShadowMaps {
     ) {
         let d = &ctx.device;
         let l = self.layout;
-        let pass = scene
-            .declare(self.pass.declare(g.pass(name), 0))
-            .image(&self.map, Access::DepthAttachmentWrite)
-            .image(&self.area_map, Access::DepthAttachmentWrite);
+        // Only the arrays with views to draw: the other keeps its layout and needs no barrier.
+        let (punctual_dirty, area_dirty) = self.dirty.split_at(l.views as usize);
+        let mut pass = scene.declare(self.pass.declare(g.pass(name), 0));
+        if punctual_dirty.contains(&true) {
+            pass = pass.image(&self.map, Access::DepthAttachmentWrite);
+        }
+        if area_dirty.contains(&true) {
+            pass = pass.image(&self.area_map, Access::DepthAttachmentWrite);
+        }
         pass.record(|cmd| {
             for (view, _) in self.dirty.iter().enumerate().filter(|(_, &d)| d) {
                 let view = view as u32;
