@@ -29,7 +29,8 @@ layout(set = 0, binding = 0, std140) uniform Frame {
     vec4 cones[16];   // diffuse cones: xyz direction in the normal's frame (z = normal), w weight
     vec4 tuning;      // x levels finer than the cone diameter to sample (keeps coarse samples off
                       // the surface the cone leaves), y radiance scale: the volumes hold
-                      // radiance x y, so that a very strong light stays within half floats
+                      // radiance x y, so that a very strong light stays within half floats;
+                      // z the specular cone's narrowest diameter (voxels)
 } frame;
 
 const uint FLAG_DYNAMIC = 1u;        // dynamic accumulators are bound and filled

@@ -238,7 +238,7 @@ void main() {
 #ifdef UPSAMPLED
         seen = up.specular;
 #endif
-        if (seen.a == 0.0) seen.rgb = trace_cone(origin, reflect(-v, n), tan_half, t0, max_dist).radiance;
+        if (seen.a == 0.0) seen.rgb = trace_specular_cone(origin, reflect(-v, n), tan_half, t0).radiance;
         specular = seen.rgb * spec_reflectance;
     }
 

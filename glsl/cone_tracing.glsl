@@ -139,7 +139,8 @@ struct Cone {
 
 // Traces from `origin` (already moved off the surface) along unit `dir`; `tan_half` is the tangent
 // of the cone's half angle; `t0` the first sample's distance; stops at `max_dist` or when opaque.
-Cone trace_cone(vec3 origin, vec3 dir, float tan_half, float t0, float max_dist) {
+// Default: the cone is at least `min_diameter` voxels wide (1, or the specular cone's floor).
+Cone trace_cone(vec3 origin, vec3 dir, float tan_half, float t0, float max_dist, float min_diameter) {
     Cone cone = Cone(vec3(0.0), 0.0, 0.0);
     float vs = voxel_size();
     float t = t0;
@@ -150,7 +151,7 @@ Cone trace_cone(vec3 origin, vec3 dir, float tan_half, float t0, float max_dist)
         if (any(lessThan(uvw, vec3(0.0))) || any(greaterThan(uvw, vec3(1.0)))) break;
         float diameter = 2.0 * tan_half * t;
 #else
-        float diameter = max(2.0 * tan_half * t, vs);
+        float diameter = max(2.0 * tan_half * t, min_diameter * vs);
         // A sample reads about a cone diameter around it, so the surfaces at the grid's edge
         // are read in full only by samples up to that far beyond it (where the volumes are
         // transparent): stopping at the edge let cones leave a closed room through its walls
@@ -185,6 +186,16 @@ Cone trace_cone(vec3 origin, vec3 dir, float tan_half, float t0, float max_dist)
     }
     cone.radiance /= frame.tuning.y;  // the volumes' radiance scale
     return cone;
+}
+
+Cone trace_cone(vec3 origin, vec3 dir, float tan_half, float t0, float max_dist) {
+    return trace_cone(origin, dir, tan_half, t0, max_dist, 1.0);
+}
+
+// The specular cone along `dir`: no narrower than frame.tuning.z voxels (a voxel's reflection
+// is no sharper than the texels the cone reads).
+Cone trace_specular_cone(vec3 origin, vec3 dir, float tan_half, float t0) {
+    return trace_cone(origin, dir, tan_half, t0, frame.cone.z * frame.grid.w, frame.tuning.z);
 }
 
 // An orthonormal frame around n (z = n).

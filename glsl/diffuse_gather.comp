@@ -123,7 +123,7 @@ void main() {
     vec4 specular = vec4(0.0);
     if (frame.trace.z > 0.0 && tan_half >= SHARED_SPECULAR) {
         vec3 r = reflect(normalize(p - frame.eye.xyz), n);
-        specular = vec4(trace_cone(origin, r, tan_half, t0, frame.cone.z * frame.grid.w).radiance, tan_half);
+        specular = vec4(trace_specular_cone(origin, r, tan_half, t0).radiance, tan_half);
     }
     imageStore(gathered_specular, q, specular);
 #ifdef TEMPORAL

@@ -121,6 +121,10 @@ struct GiOpts {
     #[arg(long, value_name = "N", conflicts_with = "paper",
           value_parser = clap::value_parser!(u32).range(0..=16))]
     temporal: Option<u32>,
+    /// The specular cone's narrowest diameter in voxels, 1 to 8 (default 2: it reads the
+    /// directional volumes from its first step; 1 the full-resolution voxels; not with --paper)
+    #[arg(long, value_name = "VOXELS", value_parser = specular_min, conflicts_with = "paper")]
+    specular_min: Option<f32>,
 }
 
 fn trace_scale(s: &str) -> Result<u32, String> {
@@ -141,6 +145,13 @@ fn step(s: &str) -> Result<f32, String> {
     match s.parse::<f32>() {
         Ok(f) if (0.05..=4.0).contains(&f) => Ok(f),
         _ => Err("must be between 0.05 and 4".into()),
+    }
+}
+
+fn specular_min(s: &str) -> Result<f32, String> {
+    match s.parse::<f32>() {
+        Ok(f) if (1.0..=8.0).contains(&f) => Ok(f),
+        _ => Err("must be between 1 and 8 (voxels)".into()),
     }
 }
 
@@ -491,6 +502,7 @@ impl GiOpts {
         gi.area_lights &= !self.no_area_lights;
         gi.trace_scale = self.trace_scale.unwrap_or(gi.trace_scale);
         gi.temporal = self.temporal.unwrap_or(gi.temporal);
+        gi.specular_min_voxels = self.specular_min.unwrap_or(gi.specular_min_voxels);
         gi
     }
 }
