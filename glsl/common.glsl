@@ -30,13 +30,15 @@ layout(set = 0, binding = 0, std140) uniform Frame {
     vec4 tuning;      // x levels finer than the cone diameter to sample (keeps coarse samples off
                       // the surface the cone leaves), y radiance scale: the volumes hold
                       // radiance x y, so that a very strong light stays within half floats;
-                      // z the specular cone's narrowest diameter (voxels)
+                      // z the specular cone's narrowest diameter (voxels), w voxels per
+                      // empty-space cell
 } frame;
 
 const uint FLAG_DYNAMIC = 1u;        // dynamic accumulators are bound and filled
 const uint FLAG_EMISSIVE = 2u;       // emission accumulators exist
 const uint FLAG_VOXEL_SHADOWS = 4u;  // visibility by tracing the voxels instead of shadow maps
 const uint FLAG_CONE_SHADOWS = 8u;   // direct light shadowed by cones through the voxels
+const uint FLAG_EMPTY_SPACE = 16u;   // the empty-space volume is filled: cones may skip by it
 
 struct Material {
     vec4 base_color;

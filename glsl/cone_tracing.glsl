@@ -23,6 +23,9 @@ layout(set = CONE_SET, binding = 6) uniform sampler3D aniso_pz;
 #ifndef PAPER
 layout(set = CONE_SET, binding = 7) uniform sampler3D light_dir;
 layout(set = CONE_SET, binding = 9) uniform sampler3D light_pos;
+// Per cell of frame.tuning.w voxels, the distance in cells to the nearest cell that holds a
+// filled voxel (empty_space.comp).
+layout(set = CONE_SET, binding = 10, r32ui) uniform readonly uimage3D empty_space;
 #endif
 
 // The directional volumes seen by a cone travelling along `dir`, weighted by dir^2. Default:
@@ -131,6 +134,30 @@ vec4 sample_cone(vec3 uvw, vec3 dir, float diameter, vec3 from) {
     return s;
 }
 
+#ifndef PAPER
+// How far from `uvw` (grid units) every voxel is empty, in world units, along the farthest
+// axis: to the edge of the box of cells within d - 1 of its own, d being its cell's distance
+// to the nearest filled one. 0 in a filled cell or outside the grid.
+float empty_reach(vec3 uvw) {
+    float c = frame.tuning.w;
+    vec3 v = uvw * float(grid_n());
+    ivec3 cell = ivec3(floor(v / c));
+    if (any(lessThan(cell, ivec3(0))) || any(greaterThanEqual(cell, imageSize(empty_space)))) return 0.0;
+    float d = float(imageLoad(empty_space, cell).r);
+    if (d == 0.0) return 0.0;
+    vec3 r = min(v - (vec3(cell) - (d - 1.0)) * c, (vec3(cell) + d) * c - v);
+    return min(r.x, min(r.y, r.z)) * voxel_size();
+}
+
+// How far from a sample of a cone of world diameter `diameter` the texels it reads reach: the
+// sampler's eight texels around it, of the coarser of the two levels it blends (full
+// resolution: the eight voxels filtered by hand), each reaching half a texel beyond its centre.
+float sample_reach(float diameter) {
+    float level = cone_level(diameter);
+    return 1.5 * voxel_size() * exp2(ceil(level));
+}
+#endif
+
 struct Cone {
     vec3 radiance;   // premultiplied, composited front to back
     float opacity;
@@ -145,6 +172,11 @@ Cone trace_cone(vec3 origin, vec3 dir, float tan_half, float t0, float max_dist,
     float vs = voxel_size();
     float t = t0;
     vec3 from = world_to_grid(origin);
+#ifndef PAPER
+    // Looked up only after a sample that read nothing: within a room most samples read
+    // something, and their steps need not pay for the lookup.
+    bool was_empty = (frame.grid_info.w & FLAG_EMPTY_SPACE) != 0u;
+#endif
     for (int i = 0; i < 1024 && t < max_dist && cone.opacity < 0.99; i++) {
         vec3 uvw = world_to_grid(origin + dir * t);
 #ifdef PAPER
@@ -159,7 +191,26 @@ Cone trace_cone(vec3 origin, vec3 dir, float tan_half, float t0, float max_dist,
         float margin = diameter / frame.grid.w;
         if (any(lessThan(uvw, vec3(-margin))) || any(greaterThan(uvw, vec3(1.0 + margin)))) break;
 #endif
+#ifndef PAPER
+        // Empty space: the samples up to where the cone's footprint could touch a filled voxel
+        // read nothing (they would add no light and no opacity); jump there. The footprint
+        // widens as the cone goes, so the jump is taken again with the reach it has at its end.
+        float empty = was_empty ? empty_reach(uvw) : 0.0;
+        if (empty > 0.0) {
+            float axis = max(abs(dir.x), max(abs(dir.y), abs(dir.z)));
+            float jump = (empty - sample_reach(diameter)) / axis;
+            float wider = max(2.0 * tan_half * (t + jump), min_diameter * vs);
+            jump = (empty - sample_reach(wider)) / axis;
+            if (jump > max(diameter * frame.cone.y, 0.1 * vs)) {
+                t += jump;
+                continue;
+            }
+        }
+#endif
         vec4 s = sample_cone(uvw, dir, diameter, from);
+#ifndef PAPER
+        was_empty = s.a == 0.0 && (frame.grid_info.w & FLAG_EMPTY_SPACE) != 0u;
+#endif
         float step_len = max(diameter * frame.cone.y, 0.1 * vs);
 #ifdef PAPER
         cone.radiance += (1.0 - cone.opacity) * s.rgb;

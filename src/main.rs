@@ -121,10 +121,14 @@ struct GiOpts {
     #[arg(long, value_name = "N", conflicts_with = "paper",
           value_parser = clap::value_parser!(u32).range(0..=16))]
     temporal: Option<u32>,
-    /// The specular cone's narrowest diameter in voxels, 1 to 8 (default 2: it reads the
-    /// directional volumes from its first step; 1 the full-resolution voxels; not with --paper)
+    /// The specular cone's narrowest diameter in voxels, 1 to 8 (default 2: a near-mirror's
+    /// cone steps a voxel at a time, not half a voxel as with 1; not with --paper)
     #[arg(long, value_name = "VOXELS", value_parser = specular_min, conflicts_with = "paper")]
     specular_min: Option<f32>,
+    /// Cones do not jump across empty space (by default they skip the samples that could
+    /// read nothing: the same image, faster in open scenes)
+    #[arg(long)]
+    no_empty_space: bool,
 }
 
 fn trace_scale(s: &str) -> Result<u32, String> {
@@ -503,6 +507,7 @@ impl GiOpts {
         gi.trace_scale = self.trace_scale.unwrap_or(gi.trace_scale);
         gi.temporal = self.temporal.unwrap_or(gi.temporal);
         gi.specular_min_voxels = self.specular_min.unwrap_or(gi.specular_min_voxels);
+        gi.empty_space &= !self.no_empty_space;
         gi
     }
 }

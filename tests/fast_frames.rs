@@ -8,7 +8,7 @@ use glam::{Mat4, Vec3};
 use gpu::*;
 use voxgi::gi::GiSettings;
 use voxgi::output::RadianceImage;
-use voxgi::render::{Mode, RenderSettings};
+use voxgi::render::{Mode, RenderSettings, Renderer};
 use voxgi::scene::Scene;
 
 const SIZE: u32 = 128;
@@ -247,6 +247,103 @@ fn the_specular_cones_floor_of_two_voxels_costs_a_near_mirror_nothing() {
     // Measured (128x128, 64^3, 64 spp): 0.0398 / 0.0396 / 0.0966.
     assert!(two < 1.05 * one, "floor 2: {two}, floor 1: {one}");
     assert!(eight > 1.1 * two, "floor 8: {eight}, floor 2: {two}");
+}
+
+/// Each cell's distance in cells (along the farthest axis) to the nearest cell holding a
+/// filled voxel, capped at 255, by brute force over the voxels.
+fn empty_space_by_hand(dump: &voxgi::gi::VoxelDump) -> Vec<u32> {
+    let (n, c) = (dump.resolution as usize, dump.empty_space_cell as usize);
+    let m = n.div_ceil(c);
+    let mut filled = Vec::new();
+    for z in 0..m {
+        for y in 0..m {
+            for x in 0..m {
+                let any = (z * c..((z + 1) * c).min(n)).any(|vz| {
+                    (y * c..((y + 1) * c).min(n)).any(|vy| {
+                        (x * c..((x + 1) * c).min(n)).any(|vx| dump.filled[vx + n * (vy + n * vz)])
+                    })
+                });
+                if any {
+                    filled.push([x as i64, y as i64, z as i64]);
+                }
+            }
+        }
+    }
+    let mut dist = Vec::with_capacity(m * m * m);
+    for z in 0..m as i64 {
+        for y in 0..m as i64 {
+            for x in 0..m as i64 {
+                let d = filled
+                    .iter()
+                    .map(|f| (f[0] - x).abs().max((f[1] - y).abs()).max((f[2] - z).abs()))
+                    .min()
+                    .unwrap_or(255)
+                    .min(255);
+                dist.push(d as u32);
+            }
+        }
+    }
+    dist
+}
+
+#[test]
+fn the_empty_space_volume_holds_each_cells_distance_to_the_nearest_filled_one() {
+    // The edges scene at 64^3 (cells of 2 voxels, 32 a side) and 48^3 (24 a side), and after
+    // its box moved (the volume is rebuilt with the voxels): against brute force.
+    let s = edges_scene();
+    for voxels in [64, 48] {
+        let mut set = settings(Mode::Full, 4, 4);
+        set.gi.voxels = voxels;
+        let dump = render_voxels(&s, set);
+        let got = dump.empty_space.clone().expect("the empty-space volume");
+        assert_eq!(dump.empty_space_cell, 2, "{voxels}^3");
+        let want = empty_space_by_hand(&dump);
+        assert_eq!(got.len(), want.len(), "{voxels}^3");
+        let wrong = got.iter().zip(&want).filter(|(a, b)| a != b).count();
+        assert_eq!(wrong, 0, "{voxels}^3: {wrong} cells differ");
+        // Filled cells, empty ones next to them and open space far from anything.
+        assert!(want.contains(&0) && want.contains(&1) && want.iter().any(|&d| d >= 4));
+    }
+    let node = s.instances[3].node;
+    let mut set = settings(Mode::Full, 4, 4);
+    set.dynamic_nodes = vec![node];
+    let ctx = context();
+    let stats = ctx.stats.clone();
+    let (before, after) = {
+        let mut r = Renderer::new(&ctx, &s, set).expect("renderer");
+        r.render(false).expect("frame");
+        let before = r.read_voxels().expect("readback").expect("voxels");
+        r.set_node_transform(node, Mat4::from_translation(Vec3::new(0.8, 0.0, 0.0)));
+        r.render(false).expect("frame");
+        (before, r.read_voxels().expect("readback").expect("voxels"))
+    };
+    drop(ctx);
+    assert_eq!(stats.count(), 0, "{}", stats.messages().join("\n"));
+    assert_ne!(before.empty_space, after.empty_space, "the box moved");
+    assert_eq!(
+        after.empty_space.clone().unwrap(),
+        empty_space_by_hand(&after)
+    );
+}
+
+#[test]
+fn cones_that_skip_empty_space_see_what_they_saw() {
+    // The skipped samples could read nothing, so the image stays (the samples after a jump
+    // fall at other distances along the cone than without it): the near-mirror edges scene,
+    // whose specular cones cross open space, and its diffuse light.
+    let s = glossy_scene(0.1);
+    for mode in [Mode::Full, Mode::Indirect] {
+        let render = |skip: bool| {
+            let mut set = settings(mode, 4, 4);
+            set.gi.empty_space = skip;
+            frames(&s, set, 0, |_| {}, 0)
+        };
+        let (on, off) = (render(true), render(false));
+        let e = rel_mse(&on, &off);
+        eprintln!("{mode:?}: relMSE with against without skipping {e}");
+        // Measured (128x128, 64^3): 3.9e-5 and 4.1e-5.
+        assert!(e < 1e-4, "{mode:?}: relMSE {e}");
+    }
 }
 
 #[test]

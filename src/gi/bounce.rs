@@ -65,6 +65,9 @@ pub fn cone_volumes(table: Bindings, volumes: &Volumes, full_res: bool) -> Bindi
     .with(volumes.light_pos.as_ref(), |t, p| {
         t.sampled("light_pos", p, s)
     })
+    .with(volumes.empty_space.as_ref(), |t, e| {
+        t.image("empty_space", e, Usage::Read)
+    })
 }
 
 impl Bounce {

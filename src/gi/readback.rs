@@ -27,6 +27,10 @@ pub struct VoxelDump {
     /// When the voxels are lit and the scene emits (default mode): the emission of emitters
     /// smaller than their voxel, as stored.
     pub small_emission: Option<Vec<f32>>,
+    /// When the voxels are lit and cones skip empty space: per cell of `empty_space_cell`
+    /// voxels a side (x fastest), its distance in cells to the nearest filled cell.
+    pub empty_space: Option<Vec<u32>>,
+    pub empty_space_cell: u32,
 }
 
 impl VoxelDump {
@@ -43,6 +47,8 @@ impl VoxelDump {
             radiance: None,
             directional: None,
             small_emission: None,
+            empty_space: None,
+            empty_space_cell: 0,
         }
     }
 
@@ -256,6 +262,10 @@ impl Gi {
             };
             sources.push((name, Src::Img(l.img, l.texel, l.level, l.side)));
         }
+        if let (Some(_), Some(img)) = (&self.empty_space, &self.volumes.empty_space) {
+            let side = self.volumes.grid.empty_space_resolution();
+            sources.push(("empty".into(), Src::Img(img, 4, 0, side)));
+        }
         (sources, directional_names)
     }
 
@@ -321,6 +331,8 @@ impl Gi {
         if !directional.is_empty() {
             dump.directional = Some(directional);
         }
+        dump.empty_space = parts.get("empty").map(|b| words(b));
+        dump.empty_space_cell = self.volumes.grid.empty_space_cell();
         dump.small_emission = parts.get("small").map(|b| {
             b.chunks_exact(4)
                 .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))

@@ -162,6 +162,10 @@ pub struct Volumes {
     /// front of the plane it leaves (a thin wall's lit face, which shares texels with the dark
     /// room beside it). None for --paper.
     pub light_pos: Option<Image>,
+    /// Per cell of `grid.empty_space_cell()` voxels a side, the distance in cells to the
+    /// nearest cell that holds a filled voxel (R32UI; src/gi/empty_space.rs). None for --paper;
+    /// a one-texel stand-in, never read, without `GiSettings::empty_space`.
+    pub empty_space: Option<Image>,
     /// Trilinear, transparent black outside the grid.
     pub sampler: Sampler,
     pub info: Vec<VolumeInfo>,
@@ -344,6 +348,30 @@ impl Volumes {
         };
         let light_dir = beside("light direction")?;
         let light_pos = beside("light position")?;
+        let empty_space = if settings.paper {
+            None
+        } else {
+            let side = if settings.empty_space {
+                grid.empty_space_resolution()
+            } else {
+                1
+            };
+            let desc = ImageDesc::d3(
+                vk::Format::R32_UINT,
+                side,
+                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+            );
+            if settings.empty_space {
+                info.push(VolumeInfo {
+                    name: format!(
+                        "empty space, {side}^3 cells of {} voxels (R32UI)",
+                        grid.empty_space_cell()
+                    ),
+                    bytes: (side as u64).pow(3) * 4,
+                });
+            }
+            Some(Image::new(ctx, "empty space", desc)?)
+        };
         let sampler = Sampler::new(
             ctx,
             &vk::SamplerCreateInfo::default()
@@ -371,6 +399,7 @@ impl Volumes {
             faces,
             light_dir,
             light_pos,
+            empty_space,
             sampler,
             info,
         })

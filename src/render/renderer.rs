@@ -431,7 +431,12 @@ impl Renderer {
                 if self.specular_needed { 1.0 } else { 0.0 },
                 self.settings.mip.unwrap_or(0) as f32,
             );
-            u.tuning = Vec4::new(s.lod_offset, gi.radiance_scale, s.specular_min_voxels, 0.0);
+            u.tuning = Vec4::new(
+                s.lod_offset,
+                gi.radiance_scale,
+                s.specular_min_voxels,
+                grid.empty_space_cell() as f32,
+            );
             for (dst, c) in u.cones.iter_mut().zip(&gi.cones) {
                 *dst = *c;
             }
