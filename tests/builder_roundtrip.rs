@@ -381,6 +381,48 @@ fn lights_round_trip() {
 }
 
 #[test]
+fn far_translations_are_read_to_the_micrometre() {
+    // 100000.35 is no f32 (it would read as 100000.3516): the loader reads node translations as
+    // the JSON's f64 and places the scene relative to its origin, where a mesh and a point light
+    // 5 cm from it keep their places to within f32's step there (30 um), in a child node too.
+    for far in [1e5 + 0.35, 1e6 + 0.35] {
+        let mut b = SceneBuilder::new();
+        let mesh = b.add_mesh("quad", vec![unit_quad(None)]);
+        let l = b.add_light(LightDesc::new("point", LightType::Point, [1.0; 3], 1.0));
+        let light = b.add_node(
+            NodeDesc::new("light")
+                .light(l)
+                .translation([0.0, 0.05, 0.0]),
+        );
+        b.add_node(
+            NodeDesc::new("far")
+                .mesh(mesh)
+                .translation([far, 2.0, -far])
+                .child(light),
+        );
+        let (s, _) = write_and_load("roundtrip-far", &b);
+        let placed = s.origin + instance(&s, "far").world.w_axis.truncate().as_dvec3();
+        let want = glam::DVec3::new(far, 2.0, -far);
+        assert!(
+            (placed - want).abs().max_element() < 3e-5,
+            "{far}: {placed}"
+        );
+        let lit = s.origin + s.lights[0].position.as_dvec3();
+        let want = glam::DVec3::new(far, 2.05, -far);
+        assert!(
+            (lit - want).abs().max_element() < 3e-5,
+            "{far}: light at {lit}"
+        );
+        let node = s
+            .nodes
+            .iter()
+            .find(|n| n.name.as_deref() == Some("far"))
+            .expect("the node");
+        assert_eq!(node.translation, glam::DVec3::new(far, 2.0, -far));
+    }
+}
+
+#[test]
 fn camera_round_trips_with_a_derived_far_plane() {
     let (s, _) = write_and_load("roundtrip-camera", &test_scene());
     let c = &s.camera;

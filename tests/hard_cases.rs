@@ -173,6 +173,8 @@ cases! {
     scale_1mm => "scale-1mm",
     scale_10km => "scale-10km",
     translated_1e5 => "translated-1e5",
+    near_light_1e5 => "near-light-1e5",
+    near_light_1e6 => "near-light-1e6",
     rotated_1e_6 => "rotated-1e-6",
     degenerate => "degenerate",
     light_zero => "light-zero",

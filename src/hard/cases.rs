@@ -6,7 +6,7 @@ use crate::gi::GiSettings;
 use crate::render::Mode;
 use crate::scene::builder::*;
 use anyhow::{ensure, Result};
-use glam::{Mat4, Vec3};
+use glam::{DVec3, Mat4, Vec3};
 
 /// The error against the reference that counts as a working render of a small test scene
 /// (the Cornell box at the defaults: about 0.005).
@@ -88,7 +88,7 @@ pub static CASES: &[Case] = &[
         what: "a room scaled to 1 mm (camera and lights too); relMSE against the 1 m image",
         metric: "relMSE",
         goal: SAME_GOAL,
-        run: |env, gi| transformed_room(env, gi, 0.001, Vec3::ZERO),
+        run: |env, gi| transformed_room(env, gi, 0.001, DVec3::ZERO, RoomLight::Point(2.0)),
     },
     Case {
         name: "scale-10km",
@@ -96,7 +96,7 @@ pub static CASES: &[Case] = &[
         what: "the room scaled to 10 km",
         metric: "relMSE",
         goal: SAME_GOAL,
-        run: |env, gi| transformed_room(env, gi, 1e4, Vec3::ZERO),
+        run: |env, gi| transformed_room(env, gi, 1e4, DVec3::ZERO, RoomLight::Point(2.0)),
     },
     Case {
         name: "translated-1e5",
@@ -104,7 +104,38 @@ pub static CASES: &[Case] = &[
         what: "the room translated 1e5 m from the origin",
         metric: "relMSE",
         goal: SAME_GOAL,
-        run: |env, gi| transformed_room(env, gi, 1.0, Vec3::new(1e5, 0.0, 0.0)),
+        run: |env, gi| {
+            transformed_room(
+                env,
+                gi,
+                1.0,
+                DVec3::new(1e5, 0.0, 0.0),
+                RoomLight::Point(2.0),
+            )
+        },
+    },
+    Case {
+        name: "near-light-1e5",
+        group: "scale and precision",
+        what: "the room with its point light 5 cm under the ceiling, translated by (1e5 + 0.35, \
+               0, 1e5 + 0.35) m (not a float's value: read as f32 the node would move 1.6 mm)",
+        metric: "relMSE",
+        goal: SAME_GOAL,
+        run: |env, gi| {
+            let offset = DVec3::new(1e5 + 0.35, 0.0, 1e5 + 0.35);
+            transformed_room(env, gi, 1.0, offset, RoomLight::PointNearCeiling(0.5))
+        },
+    },
+    Case {
+        name: "near-light-1e6",
+        group: "scale and precision",
+        what: "the same translated by (1e6 + 0.35, 0, 1e6 + 0.35) m",
+        metric: "relMSE",
+        goal: Goal::AtMost(0.01),
+        run: |env, gi| {
+            let offset = DVec3::new(1e6 + 0.35, 0.0, 1e6 + 0.35);
+            transformed_room(env, gi, 1.0, offset, RoomLight::PointNearCeiling(0.5))
+        },
     },
     Case {
         name: "rotated-1e-6",
@@ -542,8 +573,14 @@ fn two_sided_panel(env: &mut Env, gi: &GiSettings) -> Result<f64> {
     env.error_vs_reference(&s, &cam, gi)
 }
 
-fn transformed_room(env: &mut Env, gi: &GiSettings, scale: f32, offset: Vec3) -> Result<f64> {
-    let (b, cam) = room(RoomLight::Point(2.0));
+fn transformed_room(
+    env: &mut Env,
+    gi: &GiSettings,
+    scale: f32,
+    offset: DVec3,
+    light: RoomLight,
+) -> Result<f64> {
+    let (b, cam) = room(light);
     let s = env.load("room", &b)?;
     let base = env.render(&s, &cam, gi)?;
     let t = transformed(&b, scale, offset);

@@ -3,7 +3,7 @@
 
 use crate::scene::builder::*;
 use crate::scene::Camera;
-use glam::{Mat4, Vec3};
+use glam::{DVec3, Mat4, Vec3};
 
 pub const WHITE: [f32; 3] = [0.8, 0.8, 0.8];
 
@@ -174,6 +174,9 @@ pub enum RoomLight {
     None,
     /// A point light of this intensity (W/sr) under the ceiling.
     Point(f32),
+    /// A point light of this intensity 5 cm under the ceiling, above the short box: its
+    /// highlight on the ceiling changes fast with where the light is.
+    PointNearCeiling(f32),
     /// A spot under the ceiling pointing down, inner and outer cone angles (radians).
     Spot(f32, f32),
     /// An emissive panel of this strength under the ceiling, `side` metres square.
@@ -232,6 +235,11 @@ pub fn room(light: RoomLight) -> (SceneBuilder, Camera) {
         RoomLight::Point(i) => {
             let l = b.add_light(LightDesc::new("point", LightType::Point, [1.0; 3], i));
             b.add_node(NodeDesc::new("point").light(l).translation(top));
+        }
+        RoomLight::PointNearCeiling(i) => {
+            let l = b.add_light(LightDesc::new("point", LightType::Point, [1.0; 3], i));
+            let at = [0.35, 1.95, 0.3];
+            b.add_node(NodeDesc::new("point").light(l).translation(at));
         }
         RoomLight::Spot(inner, outer) => {
             let kind = LightType::Spot {
@@ -334,7 +342,7 @@ pub fn furnace(albedo: f32, le: f32) -> (SceneBuilder, Camera) {
 
 /// `b` placed under one root node that scales by `scale` and then translates by `offset`;
 /// point and spot intensities scaled by `scale`^2 so that every image stays the same.
-pub fn transformed(b: &SceneBuilder, scale: f32, offset: Vec3) -> SceneBuilder {
+pub fn transformed(b: &SceneBuilder, scale: f32, offset: DVec3) -> SceneBuilder {
     let mut out = b.clone();
     out.scale_punctual_intensities(scale * scale);
     out.wrap_roots(
@@ -347,8 +355,8 @@ pub fn transformed(b: &SceneBuilder, scale: f32, offset: Vec3) -> SceneBuilder {
 
 /// A camera moved by the same transform as [`transformed`], into the loaded scene's
 /// coordinates (relative to its `origin`, in f64 as the loader places the scene).
-pub fn transform_camera(c: &Camera, scale: f32, offset: Vec3, origin: glam::DVec3) -> Camera {
-    let eye = (c.eye().as_dvec3() * scale as f64 + offset.as_dvec3() - origin).as_vec3();
+pub fn transform_camera(c: &Camera, scale: f32, offset: DVec3, origin: DVec3) -> Camera {
+    let eye = (c.eye().as_dvec3() * scale as f64 + offset - origin).as_vec3();
     let (_, rot, _) = c.world.to_scale_rotation_translation();
     Camera {
         world: Mat4::from_rotation_translation(rot, eye),

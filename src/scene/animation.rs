@@ -3,19 +3,20 @@
 //! moves; the renderer voxelizes those nodes every frame, apart from the static voxels.
 
 use super::{Aabb, Scene};
-use glam::{DMat4, DQuat, Mat4, Quat, Vec3};
+use glam::{DMat4, DQuat, DVec3, Mat4, Quat, Vec3};
 
 /// A node of the chosen glTF scene: where it hangs and its rest pose (local TRS).
 #[derive(Clone, Debug)]
 pub struct Node {
     pub name: Option<String>,
     pub parent: Option<usize>,
-    pub translation: Vec3,
+    /// In f64 (as the file writes it): a node far from the origin keeps its place.
+    pub translation: DVec3,
     pub rotation: Quat,
     pub scale: Vec3,
     /// Given by a matrix: glTF does not animate such nodes, and neither does a spin
     /// (the matrix may not decompose into TRS).
-    pub matrix: Option<Mat4>,
+    pub matrix: Option<DMat4>,
 }
 
 /// Which part of a node's transform a channel drives.
@@ -297,7 +298,7 @@ impl Motion {
         let local = |i: usize| -> DMat4 {
             let node = &scene.nodes[i];
             if let Some(m) = node.matrix {
-                return m.as_dmat4();
+                return m;
             }
             let mut r = r_of[i].unwrap_or(node.rotation).as_dquat();
             if let Some(s) = self.spin.as_ref().filter(|s| s.node == i) {
@@ -307,7 +308,7 @@ impl Motion {
             DMat4::from_scale_rotation_translation(
                 s_of[i].unwrap_or(node.scale).as_dvec3(),
                 r,
-                t_of[i].unwrap_or(node.translation).as_dvec3(),
+                t_of[i].map_or(node.translation, |t| t.as_dvec3()),
             )
         };
         // World transforms in f64 down each node's chain of parents, relative to the origin.
@@ -387,11 +388,11 @@ pub fn rest_world(scene: &Scene, node: usize) -> DMat4 {
     while let Some(i) = at {
         let n = &scene.nodes[i];
         let local = match n.matrix {
-            Some(m) => m.as_dmat4(),
+            Some(m) => m,
             None => DMat4::from_scale_rotation_translation(
                 n.scale.as_dvec3(),
                 n.rotation.as_dquat(),
-                n.translation.as_dvec3(),
+                n.translation,
             ),
         };
         m = local * m;

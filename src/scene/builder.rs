@@ -146,7 +146,9 @@ pub struct CameraDesc {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct NodeDesc {
     pub name: Option<String>,
-    pub translation: Option<[f32; 3]>,
+    /// In f64, as glTF's JSON numbers are: a node far from the origin keeps its place to the
+    /// micrometre (f32 would round 100000.35 to 100000.3516).
+    pub translation: Option<[f64; 3]>,
     /// Unit quaternion, x y z w.
     pub rotation: Option<[f32; 4]>,
     pub scale: Option<[f32; 3]>,
@@ -177,8 +179,8 @@ impl NodeDesc {
         self.camera = Some(camera);
         self
     }
-    pub fn translation(mut self, t: [f32; 3]) -> Self {
-        self.translation = Some(t);
+    pub fn translation<T: Into<f64> + Copy>(mut self, t: [T; 3]) -> Self {
+        self.translation = Some(t.map(Into::into));
         self
     }
     pub fn rotation(mut self, xyzw: [f32; 4]) -> Self {
@@ -516,6 +518,21 @@ fn nums(v: &[f32]) -> Json {
     Json::Arr(v.iter().map(|&x| num(x)).collect())
 }
 
+/// f64s as the shortest text that reads back as the same f64.
+fn nums64(v: &[f64]) -> Json {
+    Json::Arr(
+        v.iter()
+            .map(|&x| {
+                Json::Num(if x.is_finite() {
+                    format!("{x}")
+                } else {
+                    "null".into()
+                })
+            })
+            .collect(),
+    )
+}
+
 fn push_nonempty(root: &mut Vec<(&str, Json)>, key: &'static str, items: Vec<Json>) {
     if !items.is_empty() {
         root.push((key, Json::Arr(items)));
@@ -737,7 +754,7 @@ fn node_json(n: &NodeDesc) -> Json {
         Some(m) => f.push(("matrix", nums(&m))),
         None => {
             if let Some(t) = n.translation {
-                f.push(("translation", nums(&t)));
+                f.push(("translation", nums64(&t)));
             }
             if let Some(r) = n.rotation {
                 f.push(("rotation", nums(&r)));

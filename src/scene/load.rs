@@ -66,6 +66,7 @@ fn load_inner(path: &Path) -> Result<Scene, String> {
     let base = path.parent().unwrap_or_else(|| Path::new("."));
     let buffers = load_buffers(&root, base, bin, &mut warnings)?;
 
+    let placed = placements(json_bytes, root.nodes.len());
     let mut loader = Loader {
         root: &root,
         buffers: &buffers,
@@ -81,7 +82,13 @@ fn load_inner(path: &Path) -> Result<Scene, String> {
         morph_warned: false,
         skin_warned: false,
         origin: DVec3::ZERO,
-        nodes: root.nodes.iter().map(rest_node).collect(),
+        nodes: root
+            .nodes
+            .iter()
+            .zip(&placed)
+            .map(|(n, &p)| rest_node(n, p))
+            .collect(),
+        placements: placed,
     };
     loader.origin = loader.find_origin();
     loader.walk()?;
@@ -467,6 +474,8 @@ struct Loader<'a> {
     camera_node: Option<(usize, Mat4)>,
     morph_warned: bool,
     skin_warned: bool,
+    /// Each node's translation and matrix in f64.
+    placements: Vec<Placement>,
     /// See `Scene::origin`.
     origin: DVec3,
     /// Every node of the file; the walk sets the parents of those it reaches.
@@ -487,41 +496,88 @@ fn node_label(index: usize, node: &json::Node) -> String {
     }
 }
 
-/// A node's name and rest pose (no parent yet; the walk sets it).
-fn rest_node(node: &json::Node) -> Node {
-    let rotation = Quat::from_array(node.rotation.map_or([0.0, 0.0, 0.0, 1.0], |r| r.0));
-    Node {
-        name: node.name.clone(),
-        parent: None,
-        translation: Vec3::from(node.translation.unwrap_or([0.0; 3])),
-        rotation: if rotation.is_finite() && rotation.length_squared() > 1e-12 {
-            rotation.normalize()
-        } else {
-            Quat::IDENTITY
-        },
-        scale: Vec3::from(node.scale.unwrap_or([1.0; 3])),
-        matrix: node.matrix.map(|m| Mat4::from_cols_array(&m)),
+/// A node's translation and matrix as its JSON writes them, in f64: gltf-json reads them as
+/// f32, which rounds a node 1e5 m from the origin to 8 mm (100000.35 to 100000.3516). Rotations
+/// and scales are relative and keep f32.
+#[derive(Clone, Copy, Default)]
+struct Placement {
+    translation: Option<DVec3>,
+    matrix: Option<DMat4>,
+}
+
+/// Each node's [`Placement`], read from the JSON text again (its numbers as f64); a node whose
+/// numbers do not read so (or a document that does not) falls back to gltf-json's f32.
+fn placements(json_bytes: &[u8], nodes: usize) -> Vec<Placement> {
+    let mut out = vec![Placement::default(); nodes];
+    let Ok(v) = json::deserialize::from_slice::<json::Value>(json_bytes) else {
+        return out;
+    };
+    let Some(list) = v.get("nodes").and_then(|n| n.as_array()) else {
+        return out;
+    };
+    let numbers = |v: Option<&json::Value>, n: usize| -> Option<Vec<f64>> {
+        let a = v?.as_array()?;
+        let xs: Vec<f64> = a.iter().filter_map(|x| x.as_f64()).collect();
+        (a.len() == n && xs.len() == n).then_some(xs)
+    };
+    for (p, node) in out.iter_mut().zip(list) {
+        p.translation = numbers(node.get("translation"), 3).map(|t| DVec3::from_slice(&t[..]));
+        p.matrix = numbers(node.get("matrix"), 16).map(|m| DMat4::from_cols_slice(&m[..]));
+    }
+    out
+}
+
+/// A node's rotation, or None when it holds non-finite numbers. Rotations are meant to be unit
+/// quaternions; exporters round them.
+fn node_rotation(node: &json::Node) -> Option<Quat> {
+    let r = Quat::from_array(node.rotation.map_or([0.0, 0.0, 0.0, 1.0], |r| r.0));
+    if r.is_finite() && r.length_squared() > 1e-12 {
+        Some(r.normalize())
+    } else if r.is_finite() {
+        Some(Quat::IDENTITY)
+    } else {
+        None
     }
 }
 
-/// A node's local transform, or None when it holds non-finite numbers.
-fn local_transform(node: &json::Node) -> Option<Mat4> {
-    let m = match node.matrix {
-        Some(m) => Mat4::from_cols_array(&m),
-        None => {
-            let t = Vec3::from(node.translation.unwrap_or([0.0; 3]));
-            let r = Quat::from_array(node.rotation.map_or([0.0, 0.0, 0.0, 1.0], |r| r.0));
-            let s = Vec3::from(node.scale.unwrap_or([1.0; 3]));
-            // Rotations are meant to be unit quaternions; exporters round them.
-            let r = if r.is_finite() && r.length_squared() > 1e-12 {
-                r.normalize()
-            } else if r.is_finite() {
-                Quat::IDENTITY
-            } else {
-                return None;
-            };
-            Mat4::from_scale_rotation_translation(s, r, t)
-        }
+/// A node's translation, in f64 where its JSON reads so.
+fn node_translation(node: &json::Node, placed: Placement) -> DVec3 {
+    placed
+        .translation
+        .unwrap_or_else(|| Vec3::from(node.translation.unwrap_or([0.0; 3])).as_dvec3())
+}
+
+/// A node's matrix, if it has one, in f64 where its JSON reads so.
+fn node_matrix(node: &json::Node, placed: Placement) -> Option<DMat4> {
+    let m = node.matrix?;
+    Some(
+        placed
+            .matrix
+            .unwrap_or_else(|| Mat4::from_cols_array(&m).as_dmat4()),
+    )
+}
+
+/// A node's name and rest pose (no parent yet; the walk sets it).
+fn rest_node(node: &json::Node, placed: Placement) -> Node {
+    Node {
+        name: node.name.clone(),
+        parent: None,
+        translation: node_translation(node, placed),
+        rotation: node_rotation(node).unwrap_or(Quat::IDENTITY),
+        scale: Vec3::from(node.scale.unwrap_or([1.0; 3])),
+        matrix: node_matrix(node, placed),
+    }
+}
+
+/// A node's local transform in f64, or None when it holds non-finite numbers.
+fn local_transform(node: &json::Node, placed: Placement) -> Option<DMat4> {
+    let m = match node_matrix(node, placed) {
+        Some(m) => m,
+        None => DMat4::from_scale_rotation_translation(
+            Vec3::from(node.scale.unwrap_or([1.0; 3])).as_dvec3(),
+            node_rotation(node)?.as_dquat(),
+            node_translation(node, placed),
+        ),
     };
     m.is_finite().then_some(m)
 }
@@ -586,10 +642,10 @@ impl Loader<'_> {
             if std::mem::replace(&mut visited[n], true) {
                 continue;
             }
-            let Some(local) = local_transform(node) else {
+            let Some(local) = local_transform(node, self.placements[n]) else {
                 continue;
             };
-            let world = parent * local.as_dmat4();
+            let world = parent * local;
             if node.mesh.is_some() {
                 let t = world.w_axis.truncate();
                 lo = lo.min(t);
@@ -635,8 +691,8 @@ impl Loader<'_> {
                 continue;
             }
             // In f64 down the hierarchy, rounded to f32 once, relative to the origin.
-            let Some((world64, world)) = local_transform(node)
-                .map(|l| parent * l.as_dmat4())
+            let Some((world64, world)) = local_transform(node, self.placements[n])
+                .map(|l| parent * l)
                 .map(|w| (w, w.as_mat4()))
                 .filter(|(_, w)| w.is_finite())
             else {
