@@ -36,9 +36,9 @@ impl EmptySpace {
         let cell = volumes.grid.empty_space_cell();
         let groups = |n: u32| [n.div_ceil(64), 1, 1];
         let push = cell.to_le_bytes();
-        let cells = format!("{name} cells");
+        // One name for the four dispatches, as the mip levels share theirs.
         self.cells
-            .record_dispatch(ctx, g, &cells, &[], &push, groups(m * m * m));
+            .record_dispatch(ctx, g, name, &[], &push, groups(m * m * m));
         for axis in 0u32..3 {
             let push = axis.to_le_bytes();
             self.axis
