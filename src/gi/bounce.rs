@@ -13,6 +13,10 @@ pub struct Bounce {
     gather: Pass,
     /// The filled voxels (voxel_list.comp), after the bounce's dispatch arguments and count.
     list: Buffer,
+    /// Entries the list holds.
+    capacity: u64,
+    /// The count the last listing reached (copied after it; it counts past the capacity).
+    count: Buffer,
     /// Except for --paper, which adds a voxel's bounce light as it gathers it.
     tail: Option<Tail>,
 }
@@ -21,7 +25,7 @@ pub struct Bounce {
 struct Tail {
     pass: Pass,
     /// Per listed voxel, the light it reflects (four half floats); the passes' sets hold it.
-    _reflected: Buffer,
+    reflected: Buffer,
     /// Sums over the listed voxels of albedo times closed share, and their count (64-bit fixed
     /// point each).
     reflectance: Buffer,
@@ -32,11 +36,21 @@ struct Tail {
 /// Bytes of the reflectance sums: r, g, b and count, two words each.
 const REFLECTANCE_BYTES: u64 = 32;
 
-/// Room in the voxel list: every voxel of a small grid; surfaces (about N^2 per side of the
-/// grid they cross) beyond that, so that 512^3 stays within a 128 MiB storage buffer.
-fn list_capacity(n: u32) -> u64 {
+/// The first room in the voxel list: every voxel of a small grid; surfaces (about N^2 per side
+/// of the grid they cross) beyond that, so that 512^3 starts within a 128 MiB storage buffer. A
+/// frame that lists more grows it ([`Bounce::overflow`], `Gi::fit_voxel_list`).
+pub fn list_capacity(n: u32) -> u64 {
     let n = n as u64;
     (n * n * n).min(64 * n * n)
+}
+
+/// The most a list can hold: every voxel, within what one storage buffer may span and one
+/// allocation may take (each entry 4 bytes in the list and, but for --paper, 8 in what the
+/// gather leaves).
+pub fn list_capacity_limit(ctx: &Context, n: u32, paper: bool) -> u64 {
+    let entry = if paper { 4 } else { 8 };
+    let span = (ctx.properties.limits.max_storage_buffer_range as u64).min(ctx.max_allocation);
+    (n as u64).pow(3).min((span - 16) / entry)
 }
 
 /// The directional volumes as cones sample them (glsl/cone_tracing.glsl), and where their
@@ -77,15 +91,17 @@ impl Bounce {
         volumes: &Volumes,
         paper: bool,
         tail: bool,
+        capacity: u64,
     ) -> VkResult<Bounce> {
-        let capacity = list_capacity(volumes.grid.resolution);
+        let count = Buffer::readback(ctx, "voxel list count", 4)?;
         let list = Buffer::new(
             ctx,
             "voxel list",
             16 + 4 * capacity,
             vk::BufferUsageFlags::STORAGE_BUFFER
                 | vk::BufferUsageFlags::INDIRECT_BUFFER
-                | vk::BufferUsageFlags::TRANSFER_DST,
+                | vk::BufferUsageFlags::TRANSFER_DST
+                | vk::BufferUsageFlags::TRANSFER_SRC,
             MemoryLocation::GpuOnly,
         )?;
         let buffers = if paper {
@@ -148,7 +164,7 @@ impl Bounce {
                     });
                 Some(Tail {
                     pass: Pass::compute(ctx, "bounce_tail.comp", &[scene], add, 4)?,
-                    _reflected: reflected,
+                    reflected,
                     reflectance,
                     enabled: tail,
                 })
@@ -159,6 +175,8 @@ impl Bounce {
             list_pass,
             gather,
             list,
+            capacity,
+            count,
             tail,
         })
     }
@@ -184,6 +202,39 @@ impl Bounce {
             let groups = volumes.grid.resolution.div_ceil(4);
             ctx.device.cmd_dispatch(cmd, groups, groups, groups);
         });
+        // The count, for the host to see whether the list held every filled voxel.
+        g.pass(name)
+            .buffer(&self.list, Access::TransferRead)
+            .buffer(&self.count, Access::TransferWrite)
+            .record(|cmd| unsafe {
+                let region = vk::BufferCopy::default().src_offset(12).size(4);
+                ctx.device
+                    .cmd_copy_buffer(cmd, self.list.raw, self.count.raw, &[region]);
+            });
+        g.barrier("voxel list count to host")
+            .buffer(&self.count, Access::HostRead)
+            .record(|_| {});
+    }
+
+    /// After a frame that listed the voxels: how many were filled, when the list could not
+    /// hold them all (those beyond its capacity got no bounce).
+    pub fn overflow(&self) -> Option<u64> {
+        let bytes = self.count.mapped().expect("the count is host-visible");
+        let count = u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]) as u64;
+        (count > self.capacity).then_some(count)
+    }
+
+    pub fn capacity(&self) -> u64 {
+        self.capacity
+    }
+
+    /// Every buffer it made (for a graph's states to forget when it is freed).
+    pub fn buffers(&self) -> Vec<vk::Buffer> {
+        let mut v = vec![self.list.raw, self.count.raw];
+        if let Some(t) = &self.tail {
+            v.extend([t.reflected.raw, t.reflectance.raw]);
+        }
+        v
     }
 
     /// Whether the gather leaves its light to an add pass and sums the reflectance (all but

@@ -19,7 +19,7 @@ use crate::vk::{vk, Access, Buffer, Context, Graph, Pipeline, SharedSet, VertexL
 use glam::{Vec3, Vec4};
 use std::sync::Arc;
 
-pub use bounce::Bounce;
+pub use bounce::{list_capacity, Bounce};
 pub use empty_space::EmptySpace;
 pub use inject::{Inject, ShadowMapsIn};
 pub use mip::Mip;
@@ -606,6 +606,19 @@ pub struct GiInputs<'a> {
     /// The emitters injected as lights: each one's instance (whose emission stays out of the
     /// voxels) and its emission's brightest channel.
     pub area_lights: &'a [(usize, f32)],
+    /// The bounce's list's first capacity (None: `bounce::list_capacity`).
+    pub list_capacity: Option<u64>,
+}
+
+/// What [`Gi::fit_voxel_list`] found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ListFit {
+    /// The list held every filled voxel (or was not made this frame).
+    Fits,
+    /// It did not; it now holds `to` (from `from`) and the voxels are marked to run again.
+    Grown { from: u64, to: u64 },
+    /// It did not, and cannot grow further: `count` filled voxels, `capacity` with a bounce.
+    Short { count: u64, capacity: u64 },
 }
 
 impl Gi {
@@ -654,7 +667,19 @@ impl Gi {
             None
         };
         let bounce = if light_voxels && settings.bounces >= 2 {
-            Some(Bounce::new(ctx, scene_set, &volumes, paper, settings.tail)?)
+            let n = volumes.grid.resolution;
+            let capacity = inputs
+                .list_capacity
+                .unwrap_or_else(|| bounce::list_capacity(n));
+            let capacity = capacity.clamp(1, bounce::list_capacity_limit(ctx, n, paper));
+            Some(Bounce::new(
+                ctx,
+                scene_set,
+                &volumes,
+                paper,
+                settings.tail,
+                capacity,
+            )?)
         } else {
             None
         };
@@ -804,6 +829,42 @@ impl Gi {
     /// The voxel passes have run for the current scene and lights.
     pub fn mark_clean(&mut self) {
         self.dirty = Dirty::NONE;
+    }
+
+    /// After a frame that listed the filled voxels (its fence waited): when the bounce's list
+    /// could not hold them all, a list that holds a quarter more (within the device's limit),
+    /// and the voxels marked to be listed and lit again. `forget` is told each buffer freed.
+    pub fn fit_voxel_list(
+        &mut self,
+        ctx: &Arc<Context>,
+        scene_set: &SharedSet,
+        forget: &mut dyn FnMut(vk::Buffer),
+    ) -> VkResult<ListFit> {
+        let Some(b) = &self.bounce else {
+            return Ok(ListFit::Fits);
+        };
+        let Some(count) = b.overflow() else {
+            return Ok(ListFit::Fits);
+        };
+        let from = b.capacity();
+        let n = self.volumes.grid.resolution;
+        let limit = bounce::list_capacity_limit(ctx, n, self.settings.paper);
+        let to = (count + count / 4).min(limit);
+        if to <= from {
+            return Ok(ListFit::Short {
+                count,
+                capacity: from,
+            });
+        }
+        for raw in b.buffers() {
+            forget(raw);
+        }
+        self.bounce = None;
+        let paper = self.settings.paper;
+        let tail = self.settings.tail;
+        self.bounce = Some(Bounce::new(ctx, scene_set, &self.volumes, paper, tail, to)?);
+        self.dirty = Dirty::ALL;
+        Ok(ListFit::Grown { from, to })
     }
 }
 

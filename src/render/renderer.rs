@@ -13,7 +13,8 @@ use super::lighting::LightingPass;
 use super::scene_set::SceneBindings;
 use super::shadow_maps::{ShadowLayout, ShadowMaps};
 use crate::gi::{
-    Dirty, FrameImages, Gi, GiInputs, GiSettings, ShadowMapsIn, StepInputs, TraceFrame, TraceMode,
+    Dirty, FrameImages, Gi, GiInputs, GiSettings, ListFit, ShadowMapsIn, StepInputs, TraceFrame,
+    TraceMode,
 };
 use crate::scene::{Aabb, Camera, Light, Scene};
 use crate::vk::{
@@ -166,6 +167,9 @@ pub struct RenderSettings {
     /// the image is the mean of the first this many (later frames show it). 0 or 1: off,
     /// every pixel one sample at its centre.
     pub accumulate: u32,
+    /// The first capacity of the bounce's list of filled voxels (None: every voxel of a grid up
+    /// to 64^3, 64 N^2 beyond). A frame that lists more grows it to fit and renders again.
+    pub voxel_list_capacity: Option<u64>,
 }
 
 impl RenderSettings {
@@ -192,6 +196,7 @@ impl Default for RenderSettings {
             mip: None,
             dynamic_nodes: Vec::new(),
             accumulate: 8,
+            voxel_list_capacity: None,
         }
     }
 }
@@ -239,6 +244,10 @@ pub struct Renderer {
     accumulate: Option<Accumulate>,
     mean_frames: u32,
     mean_camera: Mat4,
+    /// The bounce's list grew after the last frame (which missed some voxels' bounce), and
+    /// whether the list's limit has been reported.
+    voxel_list_grown: bool,
+    voxel_list_short_told: bool,
     ctx: Arc<Context>,
 }
 
@@ -302,6 +311,7 @@ impl Renderer {
                 vertices: instances::vertices(&[POSITION, NORMAL, UV]),
                 draw_push_size: DRAW_PUSH_SIZE,
                 area_lights: &lit,
+                list_capacity: settings.voxel_list_capacity,
             };
             let light_voxels = settings.mode.lights_voxels();
             let dynamic = instances.any_dynamic();
@@ -353,6 +363,8 @@ impl Renderer {
             accumulate,
             mean_frames: 0,
             mean_camera: Mat4::IDENTITY,
+            voxel_list_grown: false,
+            voxel_list_short_told: false,
             settings,
             ctx: ctx.clone(),
         })
@@ -447,7 +459,49 @@ impl Renderer {
     /// Renders one frame and waits for it. With `readback`, the radiance image is copied to
     /// host memory for `radiance()`.
     pub fn render(&mut self, readback: bool) -> VkResult<()> {
-        self.render_with(readback, &[], &[], &mut |_| {})
+        self.render_with(readback, &[], &[], &mut |_| {})?;
+        // The frame listed more filled voxels than the bounce's list held: again with the
+        // grown list (a window's next frame does the same).
+        if std::mem::take(&mut self.voxel_list_grown) {
+            self.render_with(readback, &[], &[], &mut |_| {})?;
+        }
+        Ok(())
+    }
+
+    /// The bounce's list of filled voxels: how many it holds.
+    pub fn voxel_list_capacity(&self) -> Option<u64> {
+        self.gi.as_ref()?.bounce.as_ref().map(|b| b.capacity())
+    }
+
+    /// After a frame that listed the filled voxels: grows the bounce's list when they did not
+    /// fit (the voxels run again next frame), or says once that it cannot.
+    fn fit_voxel_list(&mut self) -> VkResult<()> {
+        let Some(gi) = self.gi.as_mut() else {
+            return Ok(());
+        };
+        let states = &mut self.states;
+        match gi.fit_voxel_list(&self.ctx, &self.sets.scene, &mut |b| states.forget(b))? {
+            ListFit::Fits => {}
+            ListFit::Grown { from, to } => {
+                log::info!(
+                    "the bounce's list of filled voxels held {from}; it now holds {to}, and the \
+                     voxels are lit again"
+                );
+                self.voxel_list_grown = true;
+                self.history_reset = true;
+            }
+            ListFit::Short { count, capacity } => {
+                if !std::mem::replace(&mut self.voxel_list_short_told, true) {
+                    log::warn!(
+                        "the grid has {count} filled voxels and the bounce's list can hold at \
+                         most {capacity} on this device: {} voxels get no bounce (a coarser \
+                         grid, --voxels, fits)",
+                        count - capacity
+                    );
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Renders one frame, letting `after` record further passes that read the radiance image
@@ -482,10 +536,12 @@ impl Renderer {
         let cmd = self.commands.begin()?;
         let mut states = std::mem::take(&mut self.states);
         let mut timer = self.timer.take();
+        let mut listed = false;
         {
             let mut g = Graph::new(&ctx, cmd, &mut states, timer.as_mut());
             g.omit_barriers_of = self.omit_barriers_of.clone();
             for step in self.steps(readback) {
+                listed |= step == Step::Voxels(crate::gi::Step::VoxelList);
                 self.record_step(&mut g, step);
             }
             after(&mut g);
@@ -510,6 +566,9 @@ impl Renderer {
         // The voxels now hold the geometry and its light until a node or a light moves.
         if let Some(gi) = self.gi.as_mut() {
             gi.mark_clean();
+        }
+        if listed {
+            self.fit_voxel_list()?;
         }
         Ok(())
     }
