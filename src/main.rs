@@ -51,6 +51,14 @@ enum Command {
     /// Per-pass GPU medians and frame wall time over --frames after --warmup; writes DIR
     /// results.csv, results.json, results.md and pareto.png.
     Bench(BenchCmd),
+    /// Fuzz the glTF and GLB loader with damaged copies of seed scenes
+    ///
+    /// The bundled Cornell box (as .gltf and .glb) and any files given, damaged: bytes set,
+    /// cut or inserted, JSON numbers set to awkward values, structures broken (node cycles,
+    /// deep hierarchies, accessors beyond their buffers, keys removed or of another type).
+    /// Every case must load into a well-formed scene or fail with a one-line error naming the
+    /// file; panics, hangs and other outcomes are listed, and the exit status is 1.
+    FuzzLoader(FuzzCmd),
 }
 
 /// `--bounces B`: 1 to MAX_BOUNCES.
@@ -349,6 +357,25 @@ struct CompareCmd {
     /// Display exposure of both images for FLIP, in stops
     #[arg(long, value_name = "EV", default_value_t = 0.0)]
     exposure: f32,
+}
+
+#[derive(Args)]
+struct FuzzCmd {
+    /// More seeds: glTF or GLB files (the files beside them are copied along)
+    seeds: Vec<PathBuf>,
+    /// Cases to run
+    #[arg(long, default_value_t = 10_000)]
+    cases: u64,
+    /// Of the random sequence (the same seed gives the same cases)
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// A case that takes longer is a hang, in seconds
+    #[arg(long, value_name = "SECS", default_value_t = 10.0)]
+    time_limit: f64,
+    /// Where the damaged files are written, and the findings kept (default: a directory in
+    /// the system's temporary directory)
+    #[arg(long, value_name = "DIR")]
+    scratch: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -854,6 +881,63 @@ fn reference(c: ReferenceCmd) -> Result<()> {
 }
 
 /// `voxgi compare A B`: B is the reference.
+fn fuzz_loader(c: FuzzCmd) -> Result<()> {
+    use voxgi::scene::fuzz::{self, FuzzSettings, Seed};
+    let mut seeds = Seed::builtin();
+    for p in &c.seeds {
+        seeds.push(Seed::from_file(p).map_err(|e| anyhow::anyhow!(e))?);
+    }
+    let scratch = c
+        .scratch
+        .clone()
+        .unwrap_or_else(|| std::env::temp_dir().join(format!("voxgi-fuzz-{}", std::process::id())));
+    let settings = FuzzSettings {
+        cases: c.cases,
+        seed: c.seed,
+        time_limit: std::time::Duration::from_secs_f64(c.time_limit.max(0.001)),
+        scratch: scratch.clone(),
+        threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
+    };
+    // The findings list the panics; their messages need not fill the terminal meanwhile.
+    std::panic::set_hook(Box::new(|_| {}));
+    let start = std::time::Instant::now();
+    let report = fuzz::run(&seeds, &settings)
+        .with_context(|| format!("{}: cannot write the cases", scratch.display()))?;
+    let _ = std::panic::take_hook();
+    println!(
+        "{} cases in {:.0} s ({} seeds): {} loaded, {} rejected with a one-line error; {} \
+         findings; slowest case {:.0} ms",
+        report.cases,
+        start.elapsed().as_secs_f64(),
+        seeds.len(),
+        report.loaded,
+        report.rejected,
+        report.findings.len(),
+        report.slowest.as_secs_f64() * 1e3
+    );
+    for f in &report.findings {
+        println!(
+            "{:?}: case {} ({}: {}): {} [{}]",
+            f.kind,
+            f.case,
+            f.seed,
+            f.mutation,
+            f.message.lines().next().unwrap_or(""),
+            f.file.display()
+        );
+    }
+    if report.findings.is_empty() {
+        let _ = std::fs::remove_dir_all(&scratch);
+        Ok(())
+    } else {
+        bail!(
+            "{} findings (the damaged files are kept in {})",
+            report.findings.len(),
+            scratch.display()
+        )
+    }
+}
+
 fn compare(c: CompareCmd) -> Result<()> {
     let [pa, pb] = c.images.as_slice() else {
         bail!("compare takes two images, A.exr and REFERENCE.exr (voxgi help compare)");
@@ -1016,6 +1100,7 @@ fn main() -> ExitCode {
         Command::Info(c) => info(c),
         Command::Reference(c) => reference(c),
         Command::Compare(c) => compare(c),
+        Command::FuzzLoader(c) => fuzz_loader(c),
         Command::Bench(c) => bench(c),
         Command::HardCases(c) => hard_cases(c),
     };

@@ -117,6 +117,17 @@ fn truncated_and_invalid_glb() {
     let p = write(&dir, "tiny.glb", &glb[..7]);
     expect_error(&p, &["truncated", "12-byte header"]);
 
+    // Found by the fuzzer: the BIN chunk's type turned into a line break and its length past
+    // the end; the message showed the type as it was, over two lines.
+    let json_len = u32::from_le_bytes(glb[12..16].try_into().unwrap()) as usize;
+    let bin_header = 20 + json_len;
+    let mut broken_chunk = glb.clone();
+    broken_chunk[bin_header..bin_header + 4].copy_from_slice(&u32::MAX.to_le_bytes());
+    broken_chunk[bin_header + 4..bin_header + 8].copy_from_slice(b"}\n\n ");
+    let p = write(&dir, "chunk.glb", &broken_chunk);
+    let e = expect_error(&p, &["truncated .glb: chunk 1 ('}')"]);
+    assert!(!e.to_string().contains('\n'), "{e}");
+
     let mut wrong_magic = glb.clone();
     wrong_magic[..4].copy_from_slice(b"glTX");
     let p = write(&dir, "magic.glb", &wrong_magic);

@@ -226,8 +226,13 @@ fn split_container<'a>(
         let len = u32_at(at) as usize;
         let kind = &bytes[at + 4..at + 8];
         let start = at + 8;
-        let kind_name = String::from_utf8_lossy(kind)
-            .trim_end_matches('\0')
+        // As text where it is (JSON, BIN), '?' for any other byte: a damaged file's chunk type
+        // may hold a line break, and the error stays one line.
+        let kind_name: String = kind
+            .iter()
+            .map(|&b| if b.is_ascii_graphic() { b as char } else { '?' })
+            .collect::<String>()
+            .trim_end_matches('?')
             .to_string();
         if len > total - start {
             return Err(format!(

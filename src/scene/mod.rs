@@ -10,6 +10,7 @@ mod accessor;
 pub mod animation;
 mod base64;
 pub mod builder;
+pub mod fuzz;
 mod geometry;
 mod load;
 mod material;
@@ -308,6 +309,92 @@ impl Scene {
     /// `scenes/README.md` are of this kind).
     pub fn stored_triangle_count(&self) -> usize {
         self.indices.len() / 3
+    }
+
+    /// What the renderer relies on in a loaded scene: indices, primitives, instances, materials
+    /// and textures that refer to what exists, finite numbers, unit normals and tangents, a
+    /// usable camera. The first broken rule, if any.
+    pub fn check(&self) -> Result<(), String> {
+        let nv = self.vertices.len();
+        if let Some(i) = self.indices.iter().find(|&&i| i as usize >= nv) {
+            return Err(format!("index {i} of {nv} vertices"));
+        }
+        for v in &self.vertices {
+            let all = v
+                .position
+                .iter()
+                .chain(&v.normal)
+                .chain(&v.uv)
+                .chain(&v.tangent);
+            if !all.clone().all(|x| x.is_finite()) {
+                return Err(format!("a non-finite vertex {v:?}"));
+            }
+            let n = Vec3::from(v.normal);
+            let t = Vec3::from_slice(&v.tangent[..3]);
+            if (n.length() - 1.0).abs() >= 1e-3 || (t.length() - 1.0).abs() >= 1e-3 {
+                return Err(format!("a normal or tangent not of unit length {v:?}"));
+            }
+            if t.dot(n).abs() >= 1e-3 || (v.tangent[3] != 1.0 && v.tangent[3] != -1.0) {
+                return Err(format!("a tangent frame that is not one {v:?}"));
+            }
+        }
+        for (k, p) in self.primitives.iter().enumerate() {
+            let end = p.first_index as usize + p.index_count as usize;
+            if p.index_count == 0 || p.index_count % 3 != 0 || end > self.indices.len() {
+                return Err(format!("primitive {k}'s indices"));
+            }
+            if p.material as usize >= self.materials.len() || p.bounds.is_empty() {
+                return Err(format!("primitive {k}'s material or bounds"));
+            }
+        }
+        for (k, i) in self.instances.iter().enumerate() {
+            if i.primitive as usize >= self.primitives.len() || !i.world.is_finite() {
+                return Err(format!("instance {k}'s primitive or transform"));
+            }
+        }
+        for (k, m) in self.materials.iter().enumerate() {
+            let textures = [
+                (m.base_color_tex, Some(true)),
+                (m.emissive_tex, Some(true)),
+                (m.specular_color_tex, Some(true)),
+                (m.metallic_roughness_tex, Some(false)),
+                (m.normal_tex, Some(false)),
+                (m.specular_tex, Some(false)),
+            ];
+            for (t, srgb) in textures {
+                let Some(t) = t else { continue };
+                let Some(tex) = self.textures.get(t.texture as usize) else {
+                    return Err(format!(
+                        "material {k}: texture {} does not exist",
+                        t.texture
+                    ));
+                };
+                if tex.rgba8.len() as u64 != tex.width as u64 * tex.height as u64 * 4 {
+                    return Err(format!("texture {}: its size and pixels", t.texture));
+                }
+                // Colour textures are sRGB, data textures linear.
+                if Some(tex.srgb) != srgb {
+                    return Err(format!("texture {}: its colour space", t.texture));
+                }
+            }
+            if !m.base_color.is_finite() || !m.emissive.is_finite() {
+                return Err(format!("material {k}: a non-finite colour"));
+            }
+        }
+        for (k, l) in self.lights.iter().enumerate() {
+            let unit = (l.direction.length() - 1.0).abs() < 1e-4;
+            if !l.radiance.is_finite() || !l.position.is_finite() || !unit {
+                return Err(format!("light {k}: a non-finite or non-unit part"));
+            }
+        }
+        let c = &self.camera;
+        if !(c.world.is_finite() && c.yfov > 0.0 && c.znear > 0.0 && c.zfar > c.znear) {
+            return Err("the camera".into());
+        }
+        if !self.instances.is_empty() && self.bounds.is_empty() {
+            return Err("empty bounds around instances".into());
+        }
+        Ok(())
     }
 }
 
