@@ -121,3 +121,33 @@ fn help_per_command_suggestions_and_one_error_line_with_status_1() {
         );
     }
 }
+
+#[test]
+fn validation_asked_for_without_its_layer_is_a_clear_error() {
+    // The loader told to hide every layer (VK_LOADER_LAYERS_DISABLE): `--validate` cannot be
+    // honoured, and the render stops before it writes anything.
+    let dir = temp_dir("no-layer");
+    let out = dir.join("x.exr");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_voxgi"))
+        .args([
+            "render",
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--validate",
+            "--out",
+        ])
+        .arg(&out)
+        .env("VK_LOADER_LAYERS_DISABLE", "*")
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert_eq!(err.lines().count(), 1, "not one line:\n{err}");
+    assert!(
+        err.starts_with("voxgi: error: ") && err.contains("VK_LAYER_KHRONOS_validation"),
+        "{err}"
+    );
+    assert!(!out.exists(), "an image was written");
+}
