@@ -211,40 +211,21 @@ fn join_glb(json: &[u8], bin: Option<&[u8]>) -> Vec<u8> {
     out
 }
 
-/// JSON pointers to every number in `v`.
-fn numbers(v: &Value, at: String, out: &mut Vec<String>) {
-    match v {
-        Value::Number(_) => out.push(at),
-        Value::Array(a) => {
-            for (i, x) in a.iter().enumerate() {
-                numbers(x, format!("{at}/{i}"), out);
-            }
-        }
-        Value::Object(o) => {
-            for (k, x) in o {
-                let k = k.replace('~', "~0").replace('/', "~1");
-                numbers(x, format!("{at}/{k}"), out);
-            }
-        }
-        _ => {}
-    }
-}
-
-/// JSON pointers to every value in `v` below the root.
-fn values(v: &Value, at: String, out: &mut Vec<String>) {
-    if !at.is_empty() {
+/// JSON pointers to every value in `v` below the root that `keep` accepts.
+fn pointers(v: &Value, at: String, keep: fn(&Value) -> bool, out: &mut Vec<String>) {
+    if !at.is_empty() && keep(v) {
         out.push(at.clone());
     }
     match v {
         Value::Array(a) => {
             for (i, x) in a.iter().enumerate() {
-                values(x, format!("{at}/{i}"), out);
+                pointers(x, format!("{at}/{i}"), keep, out);
             }
         }
         Value::Object(o) => {
             for (k, x) in o {
                 let k = k.replace('~', "~0").replace('/', "~1");
-                values(x, format!("{at}/{k}"), out);
+                pointers(x, format!("{at}/{k}"), keep, out);
             }
         }
         _ => {}
@@ -318,7 +299,7 @@ fn break_structure(v: &mut Value, rng: &mut Rng) -> String {
         }
         4 => {
             let mut all = Vec::new();
-            values(v, String::new(), &mut all);
+            pointers(v, String::new(), |_| true, &mut all);
             let Some(target) = all.get(rng.below(all.len())).cloned() else {
                 return "nothing".into();
             };
@@ -340,7 +321,7 @@ fn break_structure(v: &mut Value, rng: &mut Rng) -> String {
         }
         5 => {
             let mut all = Vec::new();
-            values(v, String::new(), &mut all);
+            pointers(v, String::new(), |_| true, &mut all);
             let Some(target) = all.get(rng.below(all.len())).cloned() else {
                 return "nothing".into();
             };
@@ -373,7 +354,7 @@ fn damage_json(json: &[u8], rng: &mut Rng) -> Option<(Vec<u8>, String)> {
     let mut v: Value = gltf::json::deserialize::from_slice(json).ok()?;
     let what = if rng.below(2) == 0 {
         let mut paths = Vec::new();
-        numbers(&v, String::new(), &mut paths);
+        pointers(&v, String::new(), Value::is_number, &mut paths);
         let mut done = Vec::new();
         for _ in 0..1 + rng.below(3) {
             let Some(target) = paths.get(rng.below(paths.len())) else {
