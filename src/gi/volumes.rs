@@ -348,30 +348,7 @@ impl Volumes {
         };
         let light_dir = beside("light direction")?;
         let light_pos = beside("light position")?;
-        let empty_space = if settings.paper {
-            None
-        } else {
-            let side = if settings.empty_space {
-                grid.empty_space_resolution()
-            } else {
-                1
-            };
-            let desc = ImageDesc::d3(
-                vk::Format::R32_UINT,
-                side,
-                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
-            );
-            if settings.empty_space {
-                info.push(VolumeInfo {
-                    name: format!(
-                        "empty space, {side}^3 cells of {} voxels (R32UI)",
-                        grid.empty_space_cell()
-                    ),
-                    bytes: (side as u64).pow(3) * 4,
-                });
-            }
-            Some(Image::new(ctx, "empty space", desc)?)
-        };
+        let empty_space = empty_space_volume(ctx, grid, settings, &mut info)?;
         let sampler = Sampler::new(
             ctx,
             &vk::SamplerCreateInfo::default()
@@ -404,4 +381,37 @@ impl Volumes {
             info,
         })
     }
+}
+
+/// The empty-space cells' distances (R32UI; None for --paper, a one-texel stand-in, never read,
+/// when cones do not skip).
+fn empty_space_volume(
+    ctx: &Arc<Context>,
+    grid: VoxelGrid,
+    settings: &GiSettings,
+    info: &mut Vec<VolumeInfo>,
+) -> VkResult<Option<Image>> {
+    if settings.paper {
+        return Ok(None);
+    }
+    let side = if settings.empty_space {
+        grid.empty_space_resolution()
+    } else {
+        1
+    };
+    let desc = ImageDesc::d3(
+        vk::Format::R32_UINT,
+        side,
+        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+    );
+    if settings.empty_space {
+        info.push(VolumeInfo {
+            name: format!(
+                "empty space, {side}^3 cells of {} voxels (R32UI)",
+                grid.empty_space_cell()
+            ),
+            bytes: (side as u64).pow(3) * 4,
+        });
+    }
+    Image::new(ctx, "empty space", desc).map(Some)
 }
