@@ -191,79 +191,8 @@ impl Volumes {
         let n = grid.resolution;
         let voxels = (n as u64).pow(3);
         let mut info = Vec::new();
-        // TRANSFER_SRC: the debug readback copies them.
-        let storage = vk::BufferUsageFlags::STORAGE_BUFFER
-            | vk::BufferUsageFlags::TRANSFER_DST
-            | vk::BufferUsageFlags::TRANSFER_SRC
-            | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
-        // Checked before allocating anything: the largest single allocation and the largest 3D
-        // image set the largest grid. The widest per-voxel volume: the count and albedo sums
-        // (ties with the normal and emission sums; twice the radiance's RGBA16F), or for
-        // --paper one word (as wide as its RGBA8 radiance).
-        // And the shaders index a buffer's words with 32-bit signed integers (SPIR-V access
-        // chains): 2^31 words, 8 GiB, wherever a device allocates more.
-        let limit = ctx.max_allocation.min(1 << 33);
-        let (widest, texel) = if settings.paper {
-            ("voxel albedo (RGBA8 words)", 4)
-        } else {
-            ("static voxel counts and albedo sums", ALBEDO_STRIDE * 4)
-        };
-        let max_side = ctx.properties.limits.max_image_dimension3_d;
-        if voxels * texel > limit || n > max_side {
-            let largest = (1..=n.min(max_side))
-                .rev()
-                .find(|&k| (k as u64).pow(3) * texel <= limit)
-                .unwrap_or(1);
-            return Err(VkError::GridTooLarge {
-                grid: n,
-                what: widest.into(),
-                bytes: voxels * texel,
-                limit,
-                max_side,
-                largest,
-            });
-        }
-        let mut buffer = |name: &str, stride: u64| -> VkResult<Buffer> {
-            info.push(VolumeInfo {
-                name: name.into(),
-                bytes: voxels * stride * 4,
-            });
-            Buffer::new(
-                ctx,
-                name,
-                voxels * stride * 4,
-                storage,
-                MemoryLocation::GpuOnly,
-            )
-        };
-        let data = if settings.paper {
-            VoxelData::Paper {
-                albedo: buffer("voxel albedo (RGBA8 words)", 1)?,
-                normal: buffer("voxel normal (RGBA8 words)", 1)?,
-                emission: emissive
-                    .then(|| buffer("voxel emission (RGBA8 words)", 1))
-                    .transpose()?,
-                flag: dynamic.then(|| buffer("static flags", 1)).transpose()?,
-            }
-        } else {
-            let mut sums = |pass: &str| -> VkResult<Sums> {
-                Ok(Sums {
-                    albedo: buffer(
-                        &format!("{pass} voxel counts and albedo sums"),
-                        ALBEDO_STRIDE,
-                    )?,
-                    normal: buffer(&format!("{pass} voxel normal sums"), NORMAL_STRIDE)?,
-                    spread: buffer(&format!("{pass} voxel squared normal sums"), SPREAD_STRIDE)?,
-                    emission: emissive
-                        .then(|| buffer(&format!("{pass} emission sums"), EMISSION_STRIDE))
-                        .transpose()?,
-                })
-            };
-            VoxelData::Sums {
-                static_sums: sums("static")?,
-                dynamic_sums: dynamic.then(|| sums("dynamic").map(Box::new)).transpose()?,
-            }
-        };
+        check_grid_fits(ctx, grid, settings)?;
+        let data = voxel_data(ctx, grid, settings, emissive, dynamic, &mut info)?;
 
         let (format, texel) = if settings.paper {
             (vk::Format::R8G8B8A8_UNORM, 4)
@@ -414,4 +343,99 @@ fn empty_space_volume(
         });
     }
     Image::new(ctx, "empty space", desc).map(Some)
+}
+
+/// Refuses a grid before anything is allocated: the largest single allocation and the largest
+/// 3D image set the largest grid.
+fn check_grid_fits(ctx: &Context, grid: VoxelGrid, settings: &GiSettings) -> VkResult<()> {
+    let n = grid.resolution;
+    let voxels = (n as u64).pow(3);
+    // Checked before allocating anything: the largest single allocation and the largest 3D
+    // image set the largest grid. The widest per-voxel volume: the count and albedo sums
+    // (ties with the normal and emission sums; twice the radiance's RGBA16F), or for
+    // --paper one word (as wide as its RGBA8 radiance).
+    // And the shaders index a buffer's words with 32-bit signed integers (SPIR-V access
+    // chains): 2^31 words, 8 GiB, wherever a device allocates more.
+    let limit = ctx.max_allocation.min(1 << 33);
+    let (widest, texel) = if settings.paper {
+        ("voxel albedo (RGBA8 words)", 4)
+    } else {
+        ("static voxel counts and albedo sums", ALBEDO_STRIDE * 4)
+    };
+    let max_side = ctx.properties.limits.max_image_dimension3_d;
+    if voxels * texel > limit || n > max_side {
+        let largest = (1..=n.min(max_side))
+            .rev()
+            .find(|&k| (k as u64).pow(3) * texel <= limit)
+            .unwrap_or(1);
+        return Err(VkError::GridTooLarge {
+            grid: n,
+            what: widest.into(),
+            bytes: voxels * texel,
+            limit,
+            max_side,
+            largest,
+        });
+    }
+    Ok(())
+}
+
+/// Voxelization's accumulators: the original's RGBA8 words, or the default's fixed-point sums
+/// (static, and dynamic when nodes move).
+fn voxel_data(
+    ctx: &Arc<Context>,
+    grid: VoxelGrid,
+    settings: &GiSettings,
+    emissive: bool,
+    dynamic: bool,
+    info: &mut Vec<VolumeInfo>,
+) -> VkResult<VoxelData> {
+    let voxels = (grid.resolution as u64).pow(3);
+    // TRANSFER_SRC: the debug readback copies them.
+    let storage = vk::BufferUsageFlags::STORAGE_BUFFER
+        | vk::BufferUsageFlags::TRANSFER_DST
+        | vk::BufferUsageFlags::TRANSFER_SRC
+        | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS;
+    let mut buffer = |name: &str, stride: u64| -> VkResult<Buffer> {
+        info.push(VolumeInfo {
+            name: name.into(),
+            bytes: voxels * stride * 4,
+        });
+        Buffer::new(
+            ctx,
+            name,
+            voxels * stride * 4,
+            storage,
+            MemoryLocation::GpuOnly,
+        )
+    };
+    let data = if settings.paper {
+        VoxelData::Paper {
+            albedo: buffer("voxel albedo (RGBA8 words)", 1)?,
+            normal: buffer("voxel normal (RGBA8 words)", 1)?,
+            emission: emissive
+                .then(|| buffer("voxel emission (RGBA8 words)", 1))
+                .transpose()?,
+            flag: dynamic.then(|| buffer("static flags", 1)).transpose()?,
+        }
+    } else {
+        let mut sums = |pass: &str| -> VkResult<Sums> {
+            Ok(Sums {
+                albedo: buffer(
+                    &format!("{pass} voxel counts and albedo sums"),
+                    ALBEDO_STRIDE,
+                )?,
+                normal: buffer(&format!("{pass} voxel normal sums"), NORMAL_STRIDE)?,
+                spread: buffer(&format!("{pass} voxel squared normal sums"), SPREAD_STRIDE)?,
+                emission: emissive
+                    .then(|| buffer(&format!("{pass} emission sums"), EMISSION_STRIDE))
+                    .transpose()?,
+            })
+        };
+        VoxelData::Sums {
+            static_sums: sums("static")?,
+            dynamic_sums: dynamic.then(|| sums("dynamic").map(Box::new)).transpose()?,
+        }
+    };
+    Ok(data)
 }
