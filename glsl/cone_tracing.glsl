@@ -44,17 +44,18 @@ vec4 sample_directional(vec3 uvw, vec3 dir, float level, vec3 from, bool from_or
     // cone running beside a thin wall, on its dark side, reads texels that hold the wall's lit
     // face: a texel's light reaches the cone only if its origin lies in front of the plane the
     // light leaves (light_dir: where the texel's light goes, light_pos: where its surfaces lie,
-    // both light-weighted). Hidden once the origin is a quarter of a texel (of 2^(level + 1)
-    // voxels) behind that plane. (The face volumes already hide each voxel's light from cones
-    // it goes away from; a test of the texel's mean light direction against the cone's hid
-    // part of every surface's light in a texel that holds several, such as a room's corner.)
+    // both light-weighted). Hidden once the origin is a quarter of a voxel behind that plane,
+    // at every level: a ramp as wide as a quarter of the texel showed a coarse texel's light
+    // to cones starting a voxel or two behind a thin wall, and the bounce carried it into the
+    // dark room. (The face volumes already hide each voxel's light from cones it goes away
+    // from; a test of the texel's mean light direction against the cone's hid part of every
+    // surface's light in a texel that holds several, such as a room's corner.)
     if (from_origin) {
         vec4 going = textureLod(light_dir, uvw, level);
         if (going.w > 0.0) {
             vec3 g = going.xyz / going.w;
             vec3 lies = textureLod(light_pos, uvw, level).xyz / going.w;
-            float quarter_texel = exp2(level - 1.0) / float(grid_n());
-            s.rgb *= clamp(1.0 + dot(from - lies, g) / quarter_texel, 0.0, 1.0);
+            s.rgb *= clamp(1.0 + dot(from - lies, g) * float(4 * grid_n()), 0.0, 1.0);
         }
     }
 #endif

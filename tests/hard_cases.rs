@@ -20,6 +20,17 @@ const REF_SPP: u32 = 256;
 static ENV: Mutex<Option<Env>> = Mutex::new(None);
 
 fn check(name: &str) {
+    check_below(name, None)
+}
+
+/// As [`check`], but for a case whose goal is still open (docs/hard-cases.md, "Open"): its
+/// value must stay at or below `bound`, today's measurement at this size, so that it cannot
+/// get worse unseen.
+fn check_open(name: &str, bound: f64) {
+    check_below(name, Some(bound))
+}
+
+fn check_below(name: &str, open_bound: Option<f64>) {
     let case = CASES
         .iter()
         .find(|c| c.name == name)
@@ -43,6 +54,22 @@ fn check(name: &str) {
         default.non_finite
     );
     assert!(default.value.is_finite(), "{name}: value {}", default.value);
+    if let Some(bound) = open_bound {
+        assert!(
+            !case.goal.met(default.value),
+            "{name}: {} {} meets the goal {}: test it with check()",
+            case.metric,
+            default.value,
+            case.goal
+        );
+        assert!(
+            default.value <= bound,
+            "{name}: {} {} is worse than the {bound} measured when its goal was left open",
+            case.metric,
+            default.value
+        );
+        return;
+    }
     assert!(
         case.goal.met(default.value),
         "{name}: {} {} misses the goal {}",
@@ -148,13 +175,20 @@ fn the_ideal_column_is_the_path_tracer_with_the_same_bounces() {
     }
 }
 
+/// leak-junction's goal (0.01) is open (docs/hard-cases.md, "Open"): 0.0122 at 64x64, 0.01174
+/// at the tests' 48x48.
+#[test]
+fn leak_junction() {
+    check_open("leak-junction", 0.0118)
+}
+
 macro_rules! cases {
     ($($f:ident => $name:literal,)*) => {
         $(#[test] fn $f() { check($name) })*
 
         #[test]
         fn every_case_has_a_test() {
-            let tested = [$($name),*];
+            let tested = [$($name,)* "leak-junction"];
             for c in CASES {
                 assert!(tested.contains(&c.name), "no test for the hard case {}", c.name);
             }

@@ -57,6 +57,17 @@ pub static CASES: &[Case] = &[
         },
     },
     Case {
+        name: "leak-junction",
+        group: "light leaking",
+        what: "two 3 x 2.5 x 4 m rooms sharing their floor, ceiling and side walls, split by a \
+               zero-thickness divider whose edges go 1 cm into them, a 20 W/sr point light 30 \
+               cm from it; the worst of the divider on a voxel boundary, 2 cm and half a voxel \
+               off it",
+        metric: "leak ratio",
+        goal: Goal::AtMost(0.01),
+        run: junction_leak,
+    },
+    Case {
         name: "density-300",
         group: "density",
         what: "300 overlapping triangles in one voxel; largest relative error of a voxel's \
@@ -455,6 +466,19 @@ fn leak(
     for offset in [0.0, 0.02] {
         let (b, lit_cam, dark_cam) = two_rooms(axis, thickness, light, offset);
         let s = env.load("rooms", &b)?;
+        let lit = mean(&env.render(&s, &lit_cam, gi)?);
+        let dark = mean(&env.render(&s, &dark_cam, gi)?);
+        ensure!(lit > 0.0, "the lit room is black");
+        worst = worst.max(dark / lit);
+    }
+    Ok(worst)
+}
+
+fn junction_leak(env: &mut Env, gi: &GiSettings) -> Result<f64> {
+    let mut worst = 0.0f64;
+    for offset in [0.0, 0.02, 0.048] {
+        let (b, lit_cam, dark_cam) = junction_rooms(offset);
+        let s = env.load("junction", &b)?;
         let lit = mean(&env.render(&s, &lit_cam, gi)?);
         let dark = mean(&env.render(&s, &dark_cam, gi)?);
         ensure!(lit > 0.0, "the lit room is black");

@@ -168,6 +168,40 @@ pub fn two_rooms(
     (b, camera(lit), camera(centre(1.0)))
 }
 
+/// Two 3 x 2.5 x 4 m rooms side by side along x, their floor, ceiling and side walls one
+/// surface each, split by a zero-thickness divider at `x = offset` (two faces in one plane)
+/// whose edges go 1 cm into the floor, the ceiling and the side walls; a point light of 20 W/sr
+/// hangs at mid-height 30 cm from the divider on the negative side. Returns the scene and the
+/// camera of each room (lit, dark), each 10 cm from its end wall looking at the divider.
+pub fn junction_rooms(offset: f32) -> (SceneBuilder, Camera, Camera) {
+    let mut b = SceneBuilder::new();
+    let white = b.add_material(MaterialDesc::lambertian("white", WHITE));
+    let (lo, hi) = ([-3.0, 0.0, -2.0], [3.0, 2.5, 2.0]);
+    let (dlo, dhi) = ([lo[0], -0.01, -2.01], [hi[0], 2.51, 2.01]);
+    let walls = merge(&[
+        inward_box(lo, hi, white),
+        slab_face(dlo, dhi, 0, offset, -1.0, white),
+        slab_face(dlo, dhi, 0, offset, 1.0, white),
+    ]);
+    let mesh = b.add_mesh("rooms", vec![walls]);
+    b.add_node(NodeDesc::new("rooms").mesh(mesh));
+    let light = b.add_light(LightDesc::new("light", LightType::Point, [1.0; 3], 20.0));
+    b.add_node(
+        NodeDesc::new("light")
+            .light(light)
+            .translation([offset - 0.3, 1.25, 0.0]),
+    );
+    let camera = |side: f32| {
+        look_at(
+            Vec3::new(side * 2.9, 1.25, 0.0),
+            Vec3::new(offset, 1.25, 0.0),
+            70.0,
+            0.01,
+        )
+    };
+    (b, camera(-1.0), camera(1.0))
+}
+
 /// What lights the test room.
 #[derive(Clone, Copy, Debug)]
 pub enum RoomLight {
