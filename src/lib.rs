@@ -9,6 +9,7 @@ pub mod output;
 pub mod reference;
 pub mod render;
 pub mod scene;
+pub mod soak;
 pub mod view;
 pub mod vk;
 

@@ -1,7 +1,7 @@
 //! voxgi: the command line (clap). Bad input is one error line on stderr and exit status 1;
 //! `voxgi help COMMAND` and `--help` print the options.
 
-use anyhow::{bail, Context as _, Result};
+use anyhow::{anyhow, bail, Context as _, Result};
 use clap::{Args, Parser, Subcommand};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -59,6 +59,15 @@ enum Command {
     /// Every case must load into a well-formed scene or fail with a one-line error naming the
     /// file; panics, hangs and other outcomes are listed, and the exit status is 1.
     FuzzLoader(FuzzCmd),
+    /// Render thousands of frames with a moving node and moving lights, watching memory
+    ///
+    /// Every frame moves the node (--spin NODE, the scene's animations, or else the first node
+    /// with a mesh), circles the point lights and spots and swings the directional lights and
+    /// spots, so each frame voxelizes, lights and bounces again. Samples host memory (VmRSS),
+    /// GPU allocations and the timing lists; fails when host memory grows by more than
+    /// --max-growth over the run (after its first tenth), GPU memory changes, the timing lists
+    /// grow without bound, an image holds NaN or Inf, or validation (--validate) says anything.
+    Soak(SoakCmd),
 }
 
 /// `--bounces B`: 1 to MAX_BOUNCES.
@@ -357,6 +366,26 @@ struct CompareCmd {
     /// Display exposure of both images for FLIP, in stops
     #[arg(long, value_name = "EV", default_value_t = 0.0)]
     exposure: f32,
+}
+
+#[derive(Args)]
+struct SoakCmd {
+    #[command(flatten)]
+    show: ShowOpts,
+    /// Frames to render
+    #[arg(long, value_name = "N", default_value_t = 10_000, value_parser = clap::value_parser!(u32).range(1..))]
+    frames: u32,
+    /// Frames between two samples of memory
+    #[arg(long, value_name = "N", default_value_t = 100, value_parser = clap::value_parser!(u32).range(1..))]
+    sample_every: u32,
+    /// Largest relative growth of host memory allowed over the run (after its first tenth)
+    #[arg(long, value_name = "F", default_value_t = 0.01)]
+    max_growth: f64,
+    /// Also write the samples here (frame, host bytes, GPU bytes, timing entries)
+    #[arg(long, value_name = "FILE.csv")]
+    csv: Option<PathBuf>,
+    #[command(flatten)]
+    device: DeviceOpts,
 }
 
 #[derive(Args)]
@@ -703,6 +732,99 @@ fn render(c: RenderCmd) -> Result<()> {
     }
     output::save(&image, &out, c.show.exposure)?;
     eprintln!("wrote {}", out.display());
+    Ok(())
+}
+
+/// `voxgi soak`: the run lives in voxgi::soak; this picks what moves and judges the report.
+fn soak(c: SoakCmd) -> Result<()> {
+    if !(c.max_growth.is_finite() && c.max_growth >= 0.0) {
+        bail!(
+            "--max-growth {} must be a finite fraction, 0 or more",
+            c.max_growth
+        );
+    }
+    let (settings, mut scene, mut motion) = c.show.load()?;
+    if !motion.moves(&scene) {
+        // No --spin and no animation: the first node with a mesh that a spin can turn.
+        let node = scene
+            .instances
+            .iter()
+            .map(|i| i.node)
+            .find(|&n| scene.nodes[n].matrix.is_none())
+            .ok_or_else(|| {
+                anyhow!(
+                    "{}: no node with a mesh that can be moved (give --spin NODE)",
+                    scene.source.display()
+                )
+            })?;
+        motion.spin = Some(scene::Spin {
+            node,
+            degrees_per_second: scene::SPIN_DEGREES_PER_SECOND,
+        });
+    }
+    let mut settings = settings;
+    settings.dynamic_nodes = motion.prepare(&mut scene);
+    if scene.lights.is_empty() {
+        eprintln!("note: the scene has no punctual light; only the node moves");
+    }
+    let ctx = context(&c.device)?;
+    let stats = ctx.stats.clone();
+    let validating = ctx.validating;
+    eprintln!("device: {}", ctx.device_info);
+    let opts = voxgi::soak::SoakOptions {
+        frames: c.frames,
+        sample_every: c.sample_every,
+        ..Default::default()
+    };
+    let report = {
+        let mut renderer = Renderer::new(&ctx, &scene, settings)?;
+        let report = voxgi::soak::run(&mut renderer, &scene, &motion, &opts, |s| {
+            eprintln!(
+                "frame {:>6}  host {:>8.1} MiB  GPU {:>7.1} MiB  timing entries {}",
+                s.frame,
+                s.host_bytes as f64 / 1048576.0,
+                s.gpu_bytes as f64 / 1048576.0,
+                s.timing_entries
+            );
+        })?;
+        if let Some(t) = &renderer.timer {
+            print!("{}", t.report());
+        }
+        report
+    };
+    drop(ctx);
+    if let Some(path) = &c.csv {
+        let mut csv = String::from("frame,host_bytes,gpu_bytes,timing_entries\n");
+        for s in &report.samples {
+            csv.push_str(&format!(
+                "{},{},{},{}\n",
+                s.frame, s.host_bytes, s.gpu_bytes, s.timing_entries
+            ));
+        }
+        output::write_bytes_atomic(path, csv.as_bytes())?;
+    }
+    println!(
+        "{} frames in {:.0} s: host memory slope {:.2} bytes/frame ({:+.3}% over the run after \
+         its first tenth), GPU memory change {} bytes, timing entries at most {}, \
+         {} non-finite frame(s), {} validation message(s){}",
+        c.frames,
+        report.seconds,
+        report.host_slope(),
+        100.0 * report.host_growth(),
+        report.gpu_change(),
+        report.max_timing_entries(),
+        report.non_finite_frames,
+        stats.count(),
+        if validating { "" } else { " (not validating)" }
+    );
+    check_validation(&stats, validating)?;
+    // The renderer's lists hold at most twice TIMED_FRAMES frames each: the frame times and
+    // one list per pass (a frame records fewer than 64 passes).
+    let max_entries = 2 * voxgi::vk::timing::TIMED_FRAMES * 65;
+    let problems = report.problems(c.max_growth, max_entries);
+    if !problems.is_empty() {
+        bail!("{}", problems.join("; "));
+    }
     Ok(())
 }
 
@@ -1103,6 +1225,7 @@ fn main() -> ExitCode {
         Command::FuzzLoader(c) => fuzz_loader(c),
         Command::Bench(c) => bench(c),
         Command::HardCases(c) => hard_cases(c),
+        Command::Soak(c) => soak(c),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

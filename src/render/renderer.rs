@@ -552,6 +552,7 @@ impl Renderer {
         let start = std::time::Instant::now();
         let submitted = ctx.submit_and_wait_with(cmd, waits, signals);
         self.frame_ms.push(start.elapsed().as_secs_f64() * 1e3);
+        crate::vk::timing::keep_recent(&mut self.frame_ms);
         if let Some(t) = timer.as_mut() {
             t.collect()?;
         }
@@ -898,6 +899,16 @@ impl Renderer {
         if let Some(gi) = self.gi.as_mut() {
             gi.dirty.lights = true;
         }
+    }
+
+    /// Entries in the frame-time list and the pass timer's lists together (bounded: see
+    /// [`crate::vk::timing::TIMED_FRAMES`]).
+    pub fn timing_entries(&self) -> usize {
+        self.frame_ms.len()
+            + self
+                .timer
+                .as_ref()
+                .map_or(0, |t| t.samples.iter().map(|s| s.1.len()).sum())
     }
 
     /// Debug readback of the voxel volumes as the last frame left them (None in direct mode).

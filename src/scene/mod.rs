@@ -14,7 +14,7 @@ pub mod fuzz;
 mod geometry;
 mod load;
 mod material;
-pub use animation::{Animation, Motion, Node, Spin};
+pub use animation::{Animation, Motion, Node, Spin, SPIN_DEGREES_PER_SECOND};
 pub use load::{default_camera, load};
 
 /// Vertical field of view of the CONVENTIONS.md default camera.

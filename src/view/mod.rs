@@ -680,7 +680,6 @@ impl App {
             recorded = display.record(g, &target, exposure, shot_path.is_some());
         })?;
         recorded?;
-        keep_recent_timings(renderer);
         if !chain.present(&image)? {
             self.recreate = true;
         }
@@ -746,26 +745,6 @@ impl App {
             axis(&[KeyCode::KeyW], &[KeyCode::KeyS]),
         );
         self.camera.fly(dir, dt, self.shift);
-    }
-}
-
-/// Frames of timings a window keeps (it can run for hours); `--timings` reports their medians.
-const TIMED_FRAMES: usize = 600;
-
-/// Once a series reaches twice [`TIMED_FRAMES`], keeps only its last [`TIMED_FRAMES`].
-fn keep_recent(v: &mut Vec<f64>) {
-    if v.len() >= 2 * TIMED_FRAMES {
-        v.drain(..v.len() - TIMED_FRAMES);
-    }
-}
-
-/// [`keep_recent`] for a renderer's frame times and pass times.
-fn keep_recent_timings(r: &mut Renderer) {
-    keep_recent(&mut r.frame_ms);
-    if let Some(t) = r.timer.as_mut() {
-        for (_, v) in t.samples.iter_mut() {
-            keep_recent(v);
-        }
     }
 }
 
@@ -956,18 +935,6 @@ mod tests {
         for bad in ["20:320", "320x240", "a:1x1", "1:0x5", "1:99999x5"] {
             assert!(parse_resize(bad).is_err(), "{bad:?}");
         }
-    }
-
-    #[test]
-    fn timings_keep_only_recent_frames() {
-        let mut v: Vec<f64> = (0..2 * TIMED_FRAMES - 1).map(|i| i as f64).collect();
-        keep_recent(&mut v);
-        assert_eq!(v.len(), 2 * TIMED_FRAMES - 1);
-        v.push(v.len() as f64);
-        keep_recent(&mut v);
-        assert_eq!(v.len(), TIMED_FRAMES);
-        assert_eq!(v[0], TIMED_FRAMES as f64);
-        assert_eq!(*v.last().unwrap(), (2 * TIMED_FRAMES - 1) as f64);
     }
 
     #[test]

@@ -616,6 +616,11 @@ impl Context {
         r
     }
 
+    /// Bytes the allocator has handed out and not yet taken back.
+    pub fn allocated_bytes(&self) -> u64 {
+        self.allocator().generate_report().total_allocated_bytes
+    }
+
     /// Names of the allocations still alive (a leak report when called at shutdown).
     pub fn live_allocations(&self) -> Vec<String> {
         self.allocator()

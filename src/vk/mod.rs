@@ -7,7 +7,7 @@ pub mod pass;
 pub mod pipeline;
 pub mod reflect;
 mod resources;
-mod timing;
+pub mod timing;
 
 pub use commands::CommandPool;
 pub use context::{Context, ContextDesc, DeviceInfo, MessageStats};

@@ -5,6 +5,17 @@ use ash::vk;
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
+/// Frames of timings kept: a renderer can run for hours (a window, `voxgi soak`); the reports'
+/// medians are over the last of them.
+pub const TIMED_FRAMES: usize = 600;
+
+/// Once a series reaches twice [`TIMED_FRAMES`], keeps only its last [`TIMED_FRAMES`].
+pub fn keep_recent(v: &mut Vec<f64>) {
+    if v.len() >= 2 * TIMED_FRAMES {
+        v.drain(..v.len() - TIMED_FRAMES);
+    }
+}
+
 pub struct PassTimer {
     ctx: Arc<Context>,
     pool: vk::QueryPool,
@@ -12,7 +23,8 @@ pub struct PassTimer {
     used: u32,
     /// Pass names in the order their scopes began this frame.
     names: Vec<String>,
-    /// Milliseconds per pass over all collected frames, in first-seen order.
+    /// Milliseconds per pass over the collected frames (the last [`TIMED_FRAMES`] to twice
+    /// that), in first-seen order.
     pub samples: Vec<(String, Vec<f64>)>,
 }
 
@@ -104,7 +116,10 @@ impl PassTimer {
         }
         for (name, ms) in frame {
             match self.samples.iter_mut().find(|(n, _)| *n == name) {
-                Some((_, v)) => v.push(ms),
+                Some((_, v)) => {
+                    v.push(ms);
+                    keep_recent(v);
+                }
                 None => self.samples.push((name, vec![ms])),
             }
         }
@@ -157,5 +172,22 @@ impl PassTimer {
 impl Drop for PassTimer {
     fn drop(&mut self) {
         unsafe { self.ctx.device.destroy_query_pool(self.pool, None) };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn timings_keep_only_recent_frames() {
+        let mut v: Vec<f64> = (0..2 * TIMED_FRAMES - 1).map(|i| i as f64).collect();
+        keep_recent(&mut v);
+        assert_eq!(v.len(), 2 * TIMED_FRAMES - 1);
+        v.push(v.len() as f64);
+        keep_recent(&mut v);
+        assert_eq!(v.len(), TIMED_FRAMES);
+        assert_eq!(v[0], TIMED_FRAMES as f64);
+        assert_eq!(*v.last().unwrap(), (2 * TIMED_FRAMES - 1) as f64);
     }
 }
