@@ -222,6 +222,15 @@ struct DeviceOpts {
     /// Use the Vulkan device whose name contains NAME
     #[arg(long, value_name = "NAME")]
     device: Option<String>,
+    /// Refuse GPU allocations beyond MIB mebibytes in all, as a device out of memory would
+    #[arg(long, value_name = "MIB", value_parser = clap::value_parser!(u64).range(1..=1 << 40))]
+    memory_budget: Option<u64>,
+}
+
+impl DeviceOpts {
+    fn budget_bytes(&self) -> Option<u64> {
+        self.memory_budget.map(|m| m << 20)
+    }
 }
 
 #[derive(Args, Clone)]
@@ -503,8 +512,18 @@ fn context(device: &DeviceOpts) -> Result<std::sync::Arc<Context>> {
     Ok(Context::new(&ContextDesc {
         validate: device.validate,
         device: device.device.clone(),
+        memory_budget: device.budget_bytes(),
+        lose_device_after: lose_device_after(),
         ..Default::default()
     })?)
+}
+
+/// VOXGI_TEST_LOSE_DEVICE_AFTER=N: the submission after N fails as on a lost device (tests
+/// only: lavapipe cannot lose its device).
+fn lose_device_after() -> Option<u32> {
+    std::env::var("VOXGI_TEST_LOSE_DEVICE_AFTER")
+        .ok()
+        .and_then(|v| v.parse().ok())
 }
 
 /// Fails the run if validation reported anything (the messages were printed as they came).
@@ -648,6 +667,7 @@ fn view(c: ViewCmd) -> Result<()> {
         exposure: c.show.exposure,
         timings: c.show.render.timings,
         validate: validating,
+        memory_budget: c.device.budget_bytes(),
         device: c.device.device,
     })?;
     if let Some(ms) = report.median_frame_ms {
@@ -1090,6 +1110,7 @@ fn bench(c: BenchCmd) -> Result<()> {
         exposure: c.exposure,
         accumulate: c.accumulate,
         validate: c.device.validate,
+        memory_budget: c.device.budget_bytes(),
         device: c.device.device,
         command_line: voxgi::bench::shell_words(
             &std::iter::once("voxgi".to_string())

@@ -50,6 +50,8 @@ pub struct BenchOptions {
     pub accumulate: u32,
     pub validate: bool,
     pub device: Option<String>,
+    /// `--memory-budget`, bytes.
+    pub memory_budget: Option<u64>,
     /// The command line, quoted in results.md.
     pub command_line: String,
 }
@@ -72,6 +74,7 @@ impl Default for BenchOptions {
             accumulate: RenderSettings::default().accumulate,
             validate: false,
             device: None,
+            memory_budget: None,
             command_line: String::new(),
         }
     }
@@ -583,6 +586,7 @@ pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
     let ctx = Context::new(&ContextDesc {
         validate: opts.validate,
         device: opts.device.clone(),
+        memory_budget: opts.memory_budget,
         ..Default::default()
     })?;
     let device = ctx.device_info.to_string();

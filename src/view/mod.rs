@@ -146,6 +146,8 @@ pub struct ViewOptions {
     pub timings: bool,
     pub validate: bool,
     pub device: Option<String>,
+    /// `--memory-budget`, bytes.
+    pub memory_budget: Option<u64>,
 }
 
 /// What a run did, for the command line to report.
@@ -238,6 +240,8 @@ pub fn run(opts: ViewOptions) -> Result<ViewReport> {
         device: opts.device.clone(),
         instance_extensions,
         device_extensions: vec![ash::khr::swapchain::NAME.to_owned()],
+        memory_budget: opts.memory_budget,
+        ..Default::default()
     })?;
     eprintln!("device: {}", ctx.device_info);
     let stats = ctx.stats.clone();

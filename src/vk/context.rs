@@ -23,6 +23,12 @@ pub struct ContextDesc {
     pub instance_extensions: Vec<CString>,
     /// Extra device extensions (e.g. VK_KHR_swapchain).
     pub device_extensions: Vec<CString>,
+    /// Refuse allocations that would take the bytes in use past this, as a device out of
+    /// memory would (`--memory-budget`: a share of a machine, or running out on purpose).
+    pub memory_budget: Option<u64>,
+    /// Testing only: the submission after this many fails as on a lost device
+    /// (VOXGI_TEST_LOSE_DEVICE_AFTER, since lavapipe cannot lose its device).
+    pub lose_device_after: Option<u32>,
 }
 
 /// Validation messages seen by the debug messenger.
@@ -97,6 +103,9 @@ pub struct Context {
     pub timestamp_valid_bits: u32,
     pub validating: bool,
     allocator: ManuallyDrop<Mutex<Allocator>>,
+    memory_budget: Option<u64>,
+    /// Submissions left before a simulated device loss (ContextDesc::lose_device_after).
+    submits_left: Mutex<Option<u32>>,
     /// Command pool of the one-shot helper.
     one_shot_pool: vk::CommandPool,
 }
@@ -499,7 +508,10 @@ impl Context {
                 unsafe { device.destroy_device(None) };
                 return Err(fail(VkError::Alloc {
                     name: "allocator".into(),
-                    source: e,
+                    size: 0,
+                    in_use: 0,
+                    budget: None,
+                    error: e,
                 }));
             }
         };
@@ -536,12 +548,37 @@ impl Context {
             timestamp_valid_bits,
             validating: desc.validate,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
+            memory_budget: desc.memory_budget,
+            submits_left: Mutex::new(desc.lose_device_after),
             one_shot_pool,
         }))
     }
 
     pub fn allocator(&self) -> std::sync::MutexGuard<'_, Allocator> {
         self.allocator.lock().unwrap()
+    }
+
+    /// Allocates device memory for a resource named `desc.name`, within the memory budget.
+    pub fn allocate(
+        &self,
+        desc: &gpu_allocator::vulkan::AllocationCreateDesc<'_>,
+    ) -> VkResult<gpu_allocator::vulkan::Allocation> {
+        let mut allocator = self.allocator();
+        let in_use = allocator.generate_report().total_allocated_bytes;
+        let size = desc.requirements.size;
+        let over_budget = self.memory_budget.is_some_and(|b| in_use + size > b);
+        let result = if over_budget {
+            Err(gpu_allocator::AllocationError::OutOfMemory)
+        } else {
+            allocator.allocate(desc)
+        };
+        result.map_err(|error| VkError::Alloc {
+            name: desc.name.into(),
+            size,
+            in_use,
+            budget: self.memory_budget,
+            error,
+        })
     }
 
     /// Gives a Vulkan object a name that validation messages and tools show.
@@ -597,6 +634,15 @@ impl Context {
                 .create_fence(&vk::FenceCreateInfo::default(), None)
         }
         .check("vkCreateFence")?;
+        if let Some(left) = self.submits_left.lock().unwrap().as_mut() {
+            if *left == 0 {
+                unsafe { self.device.destroy_fence(fence, None) };
+                return Err(VkError::DeviceLost {
+                    call: "vkQueueSubmit2",
+                });
+            }
+            *left -= 1;
+        }
         let cmds = [vk::CommandBufferSubmitInfo::default().command_buffer(cmd)];
         let submit = vk::SubmitInfo2::default()
             .command_buffer_infos(&cmds)

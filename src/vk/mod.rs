@@ -35,11 +35,25 @@ pub enum VkError {
     Missing { device: String, missing: String },
     #[error("the Khronos validation layer (VK_LAYER_KHRONOS_validation) was asked for but is not installed")]
     NoValidationLayer,
-    #[error("GPU memory allocation {name:?} failed: {source}")]
+    #[error(
+        "GPU memory allocation {name:?} ({} MiB) failed with {} MiB in use{}: {}",
+        mib(*size),
+        mib(*in_use),
+        budget.map_or(String::new(), |b| format!(" of the --memory-budget {} MiB", mib(b))),
+        alloc_reason(error)
+    )]
     Alloc {
         name: String,
-        source: gpu_allocator::AllocationError,
+        size: u64,
+        in_use: u64,
+        budget: Option<u64>,
+        error: gpu_allocator::AllocationError,
     },
+    #[error(
+        "the Vulkan device was lost ({call}: a driver reset, a GPU hang or a removed device); \
+         the frame was abandoned"
+    )]
+    DeviceLost { call: &'static str },
     /// A call the renderer cannot honour as asked (the message says why).
     #[error("{0}")]
     Request(String),
@@ -75,6 +89,24 @@ pub(crate) trait Check<T> {
 
 impl<T> Check<T> for Result<T, vk::Result> {
     fn check(self, call: &'static str) -> VkResult<T> {
-        self.map_err(|result| VkError::Call { call, result })
+        self.map_err(|result| match result {
+            vk::Result::ERROR_DEVICE_LOST => VkError::DeviceLost { call },
+            _ => VkError::Call { call, result },
+        })
+    }
+}
+
+/// Bytes as MiB with one decimal.
+fn mib(bytes: u64) -> String {
+    format!("{:.1}", bytes as f64 / 1048576.0)
+}
+
+/// What an allocation failure means, in a few words.
+fn alloc_reason(e: &gpu_allocator::AllocationError) -> String {
+    match e {
+        gpu_allocator::AllocationError::OutOfMemory => {
+            "out of device memory (a smaller --voxels, image or --shadow-res may fit)".into()
+        }
+        other => other.to_string(),
     }
 }

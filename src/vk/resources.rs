@@ -1,6 +1,6 @@
 //! Thin RAII wrappers: each owns its Vulkan object and named allocation and frees them in Drop.
 
-use super::{Check, Context, VkError, VkResult};
+use super::{Check, Context, VkResult};
 use ash::vk;
 use gpu_allocator::vulkan::{Allocation, AllocationCreateDesc, AllocationScheme};
 use gpu_allocator::MemoryLocation;
@@ -40,7 +40,7 @@ impl Buffer {
             .sharing_mode(vk::SharingMode::EXCLUSIVE);
         let raw = unsafe { ctx.device.create_buffer(&info, None) }.check("vkCreateBuffer")?;
         let requirements = unsafe { ctx.device.get_buffer_memory_requirements(raw) };
-        let allocation = ctx.allocator().allocate(&AllocationCreateDesc {
+        let allocation = ctx.allocate(&AllocationCreateDesc {
             name,
             requirements,
             location,
@@ -49,12 +49,9 @@ impl Buffer {
         });
         let allocation = match allocation {
             Ok(a) => a,
-            Err(source) => {
+            Err(e) => {
                 unsafe { ctx.device.destroy_buffer(raw, None) };
-                return Err(VkError::Alloc {
-                    name: name.into(),
-                    source,
-                });
+                return Err(e);
             }
         };
         let bound = unsafe {
@@ -220,7 +217,7 @@ impl Image {
             .initial_layout(vk::ImageLayout::UNDEFINED);
         let raw = unsafe { ctx.device.create_image(&info, None) }.check("vkCreateImage")?;
         let requirements = unsafe { ctx.device.get_image_memory_requirements(raw) };
-        let allocation = match ctx.allocator().allocate(&AllocationCreateDesc {
+        let allocation = match ctx.allocate(&AllocationCreateDesc {
             name,
             requirements,
             location: MemoryLocation::GpuOnly,
@@ -228,12 +225,9 @@ impl Image {
             allocation_scheme: AllocationScheme::GpuAllocatorManaged,
         }) {
             Ok(a) => a,
-            Err(source) => {
+            Err(e) => {
                 unsafe { ctx.device.destroy_image(raw, None) };
-                return Err(VkError::Alloc {
-                    name: name.into(),
-                    source,
-                });
+                return Err(e);
             }
         };
         let mut image = Image {
