@@ -68,6 +68,13 @@ enum Command {
     /// --max-growth over the run (after its first tenth), GPU memory changes, the timing lists
     /// grow without bound, an image holds NaN or Inf, or validation (--validate) says anything.
     Soak(SoakCmd),
+    /// Every scene given in every mode, default and --paper, under validation
+    ///
+    /// Each run renders --frames frames with a node and the lights moving (as soak does; a
+    /// scene without punctual lights gets --sun 50,30,4). Prints a markdown table of the
+    /// validation messages, the frames with NaN or Inf pixels and the NaN or Inf voxels left in
+    /// the volumes, per scene and mode; exit status 1 if any is not 0.
+    ValidationSweep(SweepCmd),
 }
 
 /// `--bounces B`: 1 to MAX_BOUNCES.
@@ -395,6 +402,28 @@ struct SoakCmd {
     csv: Option<PathBuf>,
     #[command(flatten)]
     device: DeviceOpts,
+}
+
+#[derive(Args)]
+struct SweepCmd {
+    /// glTF 2.0 files (.gltf or .glb)
+    #[arg(required = true)]
+    scenes: Vec<PathBuf>,
+    /// Frames per run
+    #[arg(long, value_name = "N", default_value_t = 30, value_parser = clap::value_parser!(u32).range(1..))]
+    frames: u32,
+    /// Image side in pixels
+    #[arg(long, value_name = "N", default_value_t = 32, value_parser = side_range())]
+    size: u32,
+    /// Voxels per side of the grid
+    #[arg(long, value_name = "N", default_value_t = 32, value_parser = clap::value_parser!(u32).range(4..=1024))]
+    voxels: u32,
+    /// Also write the table here
+    #[arg(long, value_name = "FILE.md")]
+    out: Option<PathBuf>,
+    /// Use the Vulkan device whose name contains NAME
+    #[arg(long, value_name = "NAME")]
+    device: Option<String>,
 }
 
 #[derive(Args)]
@@ -763,25 +792,14 @@ fn soak(c: SoakCmd) -> Result<()> {
             c.max_growth
         );
     }
-    let (settings, mut scene, mut motion) = c.show.load()?;
-    if !motion.moves(&scene) {
-        // No --spin and no animation: the first node with a mesh that a spin can turn.
-        let node = scene
-            .instances
-            .iter()
-            .map(|i| i.node)
-            .find(|&n| scene.nodes[n].matrix.is_none())
-            .ok_or_else(|| {
-                anyhow!(
-                    "{}: no node with a mesh that can be moved (give --spin NODE)",
-                    scene.source.display()
-                )
-            })?;
-        motion.spin = Some(scene::Spin {
-            node,
-            degrees_per_second: scene::SPIN_DEGREES_PER_SECOND,
-        });
-    }
+    let (settings, mut scene, motion) = c.show.load()?;
+    // No --spin and no animation: the first node with a mesh that a spin can turn.
+    let motion = voxgi::soak::moving_something(&scene, motion).ok_or_else(|| {
+        anyhow!(
+            "{}: no node with a mesh that can be moved (give --spin NODE)",
+            scene.source.display()
+        )
+    })?;
     let mut settings = settings;
     settings.dynamic_nodes = motion.prepare(&mut scene);
     if scene.lights.is_empty() {
@@ -844,6 +862,99 @@ fn soak(c: SoakCmd) -> Result<()> {
     let problems = report.problems(c.max_growth, max_entries);
     if !problems.is_empty() {
         bail!("{}", problems.join("; "));
+    }
+    Ok(())
+}
+
+/// `voxgi validation-sweep`: scenes x modes x (default, --paper) under one validated context.
+fn validation_sweep(c: SweepCmd) -> Result<()> {
+    let ctx = Context::new(&ContextDesc {
+        validate: true,
+        device: c.device.clone(),
+        ..Default::default()
+    })?;
+    eprintln!("device: {}", ctx.device_info);
+    let mut table = String::from(
+        "| scene | mode | messages (default / --paper) | frames with NaN or Inf | NaN or Inf \
+         voxels | seconds |\n|---|---|---|---|---|---|\n",
+    );
+    let mut failed = Vec::new();
+    let start = std::time::Instant::now();
+    for path in &c.scenes {
+        let mut scene = load_scene(path)?;
+        if scene.lights.is_empty() {
+            scene
+                .lights
+                .push(parse_sun("50,30,4").map_err(|e| anyhow!(e))?);
+        }
+        let name = path
+            .file_stem()
+            .map_or("scene".into(), |s| s.to_string_lossy().into_owned());
+        let Some(motion) = voxgi::soak::moving_something(&scene, scene::Motion::default()) else {
+            bail!("{}: no node with a mesh that can be moved", path.display());
+        };
+        let dynamic = motion.prepare(&mut scene);
+        for mode in Mode::ALL {
+            let mut cells = Vec::new();
+            for paper in [false, true] {
+                let settings = RenderSettings {
+                    width: c.size,
+                    height: c.size,
+                    mode,
+                    shadow_resolution: 256,
+                    area_shadow_resolution: 64,
+                    dynamic_nodes: dynamic.clone(),
+                    gi: if paper {
+                        GiSettings::paper(c.voxels)
+                    } else {
+                        GiSettings {
+                            voxels: c.voxels,
+                            ..Default::default()
+                        }
+                    },
+                    ..Default::default()
+                };
+                let run = voxgi::soak::sweep_run(&ctx, &scene, &motion, settings, c.frames)
+                    .with_context(|| format!("{} in {mode:?} mode", path.display()))?;
+                if run.messages + run.non_finite_frames as usize + run.non_finite_voxels > 0 {
+                    failed.push(format!(
+                        "{name} {mode:?}{}",
+                        if paper { " --paper" } else { "" }
+                    ));
+                }
+                cells.push(run);
+            }
+            let (d, p) = (&cells[0], &cells[1]);
+            let row = format!(
+                "| {name} | {} | {} / {} | {} / {} | {} / {} | {:.1} / {:.1} |\n",
+                Mode::NAMES.split(", ").nth(mode as usize).unwrap_or("?"),
+                d.messages,
+                p.messages,
+                d.non_finite_frames,
+                p.non_finite_frames,
+                d.non_finite_voxels,
+                p.non_finite_voxels,
+                d.seconds,
+                p.seconds
+            );
+            eprint!("{row}");
+            table.push_str(&row);
+        }
+    }
+    drop(ctx);
+    print!("{table}");
+    println!(
+        "{} scene(s) x {} modes x 2, {} frames each, {:.0} s",
+        c.scenes.len(),
+        Mode::ALL.len(),
+        c.frames,
+        start.elapsed().as_secs_f64()
+    );
+    if let Some(out) = &c.out {
+        output::write_bytes_atomic(out, table.as_bytes())?;
+    }
+    if !failed.is_empty() {
+        bail!("not clean: {}", failed.join(", "));
     }
     Ok(())
 }
@@ -1247,6 +1358,7 @@ fn main() -> ExitCode {
         Command::Bench(c) => bench(c),
         Command::HardCases(c) => hard_cases(c),
         Command::Soak(c) => soak(c),
+        Command::ValidationSweep(c) => validation_sweep(c),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

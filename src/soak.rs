@@ -235,6 +235,70 @@ pub fn run(
     Ok(report)
 }
 
+/// What moves when the scene and the options move nothing: a spin of the first node with a
+/// mesh that a spin can turn (None if there is none).
+pub fn moving_something(scene: &Scene, motion: Motion) -> Option<Motion> {
+    if motion.moves(scene) {
+        return Some(motion);
+    }
+    let node = scene
+        .instances
+        .iter()
+        .map(|i| i.node)
+        .find(|&n| scene.nodes[n].matrix.is_none())?;
+    Some(Motion {
+        spin: Some(crate::scene::Spin {
+            node,
+            degrees_per_second: crate::scene::SPIN_DEGREES_PER_SECOND,
+        }),
+        ..motion
+    })
+}
+
+/// One run of the validation sweep (`voxgi validation-sweep`): a scene in one mode, default or
+/// `--paper`, some frames with a node and the lights moving.
+#[derive(Clone, Debug)]
+pub struct SweepRun {
+    pub frames: u32,
+    /// Validation messages during the run.
+    pub messages: usize,
+    pub non_finite_frames: u32,
+    /// NaN or Inf voxels and texels left in the lit volumes after the last frame.
+    pub non_finite_voxels: usize,
+    pub seconds: f64,
+}
+
+/// Renders `frames` frames of `scene` (prepared for `motion`) as `settings` ask, moving the
+/// motion's nodes and the lights, and counts what the sweep must not see.
+pub fn sweep_run(
+    ctx: &std::sync::Arc<crate::vk::Context>,
+    scene: &Scene,
+    motion: &Motion,
+    settings: crate::render::RenderSettings,
+    frames: u32,
+) -> VkResult<SweepRun> {
+    let before = ctx.stats.count();
+    let start = std::time::Instant::now();
+    let mut renderer = Renderer::new(ctx, scene, settings)?;
+    let opts = SoakOptions {
+        frames,
+        sample_every: frames.max(1),
+        ..Default::default()
+    };
+    let report = run(&mut renderer, scene, motion, &opts, |_| {})?;
+    let voxels = renderer
+        .count_non_finite()?
+        .map_or(0, |n| n.radiance + n.directional + n.small_emission);
+    drop(renderer);
+    Ok(SweepRun {
+        frames,
+        messages: ctx.stats.count() - before,
+        non_finite_frames: report.non_finite_frames,
+        non_finite_voxels: voxels,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -60,3 +60,49 @@ fn a_bad_max_growth_is_a_clear_error() {
         assert!(stderr.contains(shown), "{stderr}");
     }
 }
+
+#[test]
+fn the_validation_sweep_covers_every_mode_and_both_columns() {
+    // Two small shared models (the 10,000-frame soak and the full sweep over every shared
+    // scene are in docs/robustness.md): every mode, default and --paper, a node and the sun
+    // moving, under validation.
+    let dir = common::temp_dir("sweep");
+    let table = dir.join("sweep.md");
+    let s = common::scenes_dir();
+    let (ok, stdout, stderr) = common::voxgi(&[
+        "validation-sweep",
+        s.join("Box/Box.gltf").to_str().unwrap(),
+        s.join("BoxTextured/BoxTextured.gltf").to_str().unwrap(),
+        "--frames",
+        "3",
+        "--size",
+        "16",
+        "--voxels",
+        "16",
+        "--out",
+        table.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    let text = std::fs::read_to_string(&table).unwrap();
+    let rows: Vec<&str> = text.lines().skip(2).collect();
+    assert_eq!(rows.len(), 2 * 8, "{text}");
+    for mode in voxgi::render::Mode::NAMES.split(", ") {
+        assert_eq!(
+            rows.iter()
+                .filter(|r| r.contains(&format!("| {mode} |")))
+                .count(),
+            2,
+            "{mode}: {text}"
+        );
+    }
+    for r in &rows {
+        assert!(r.contains("| 0 / 0 | 0 / 0 | 0 / 0 |"), "{r}");
+    }
+}
+
+#[test]
+fn a_sweep_of_a_missing_scene_is_a_clear_error() {
+    let (ok, _, stderr) = common::voxgi(&["validation-sweep", "no/such/scene.gltf"]);
+    assert!(!ok);
+    assert!(stderr.contains("no/such/scene.gltf"), "{stderr}");
+}
