@@ -259,6 +259,62 @@ struct SpinOpts {
     spin_speed: Option<f32>,
 }
 
+/// Where the camera is: one of the file's, or an eye and a target.
+#[derive(Args, Clone)]
+struct CameraOpts {
+    /// View through the file's camera NAME, or the one of index INDEX in its cameras
+    #[arg(long, value_name = "NAME|INDEX", conflicts_with = "eye")]
+    camera: Option<String>,
+    /// Place the camera at X,Y,Z (the file's coordinates, metres), looking at --target
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, requires = "target", allow_hyphen_values = true)]
+    eye: Option<glam::DVec3>,
+    /// The point the camera looks at (with --eye)
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, requires = "eye", allow_hyphen_values = true)]
+    target: Option<glam::DVec3>,
+    /// The camera's up direction (with --eye; default 0,1,0)
+    #[arg(long, value_name = "X,Y,Z", value_parser = parse_point, requires = "eye", allow_hyphen_values = true)]
+    up: Option<glam::DVec3>,
+    /// Vertical field of view in degrees (with --eye; default the scene camera's)
+    #[arg(long, value_name = "DEG", requires = "eye")]
+    fov: Option<f32>,
+}
+
+impl CameraOpts {
+    fn view(&self) -> Option<scene::ViewSpec> {
+        if let Some(c) = &self.camera {
+            return Some(scene::ViewSpec::Camera(c.clone()));
+        }
+        Some(scene::ViewSpec::LookAt {
+            eye: self.eye?,
+            target: self.target?,
+            up: self.up.map_or(glam::Vec3::Y, |u| u.as_vec3()),
+            yfov_deg: self.fov,
+        })
+    }
+
+    /// Places `scene`'s camera as asked (nothing asked: the file's first camera or the
+    /// default).
+    fn apply(&self, scene: &mut Scene) -> Result<()> {
+        if let Some(v) = self.view() {
+            scene.set_view(&v).map_err(|e| anyhow!(e))?;
+        }
+        Ok(())
+    }
+}
+
+/// `X,Y,Z`: three finite numbers.
+fn parse_point(s: &str) -> Result<glam::DVec3, String> {
+    let v: Vec<f64> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| "expected X,Y,Z".to_string())?;
+    match v.as_slice() {
+        [x, y, z] if v.iter().all(|c| c.is_finite()) => Ok(glam::DVec3::new(*x, *y, *z)),
+        _ => Err("expected three finite numbers X,Y,Z".into()),
+    }
+}
+
 /// What `render` and `view` share: the scene, how it is rendered, lit, moved and shown.
 #[derive(Args)]
 struct ShowOpts {
@@ -273,6 +329,8 @@ struct ShowOpts {
     sun: SunOpt,
     #[command(flatten)]
     spin: SpinOpts,
+    #[command(flatten)]
+    camera: CameraOpts,
 }
 
 impl ShowOpts {
@@ -281,7 +339,8 @@ impl ShowOpts {
     fn load(&self) -> Result<(RenderSettings, Scene, scene::Motion)> {
         let path = self.scene.clone().unwrap_or_else(default_scene);
         let settings = self.render.settings()?;
-        let scene = scene_with_sun(&path, &self.sun)?;
+        let mut scene = scene_with_sun(&path, &self.sun)?;
+        self.camera.apply(&mut scene)?;
         warn_if_unlit(&scene, &path);
         let motion = motion(&self.spin, &scene)?;
         Ok((settings, scene, motion))
@@ -345,6 +404,8 @@ struct InfoCmd {
     #[command(flatten)]
     render: RenderOpts,
     #[command(flatten)]
+    camera: CameraOpts,
+    #[command(flatten)]
     device: DeviceOpts,
 }
 
@@ -365,6 +426,8 @@ struct ReferenceCmd {
     seed: u64,
     #[command(flatten)]
     sun: SunOpt,
+    #[command(flatten)]
+    camera: CameraOpts,
     /// Only the light a tracer with B bounces models (render's --bounces: B reflections of
     /// punctual lights' light besides the surface seen, B - 1 of emitters'), the best such a
     /// tracer can do
@@ -513,6 +576,8 @@ struct BenchCmd {
     orbit: f32,
     #[command(flatten)]
     sun: SunOpt,
+    #[command(flatten)]
+    camera: CameraOpts,
     /// Display exposure of both images for FLIP, in stops
     #[arg(long, value_name = "EV", default_value_t = 0.0)]
     exposure: f32,
@@ -964,7 +1029,8 @@ fn info(c: InfoCmd) -> Result<()> {
         [s] => s.clone(),
         _ => bail!("info takes one scene (voxgi help info)"),
     };
-    let scene = load_scene(&scene_path)?;
+    let mut scene = load_scene(&scene_path)?;
+    c.camera.apply(&mut scene)?;
     println!("scene      {}", scene.source.display());
     println!("triangles  {}", scene.triangle_count());
     println!(
@@ -1023,6 +1089,21 @@ fn info(c: InfoCmd) -> Result<()> {
         cam.znear,
         cam.zfar
     );
+    if !scene.cameras.is_empty() {
+        let list: Vec<String> = scene
+            .cameras
+            .iter()
+            .map(|c| {
+                let name = c
+                    .name
+                    .as_deref()
+                    .map_or(String::new(), |n| format!(" {n:?}"));
+                let usable = if c.camera.is_ok() { "" } else { " (unusable)" };
+                format!("{}{name}{usable}", c.index)
+            })
+            .collect();
+        println!("cameras    {} (--camera NAME|INDEX)", list.join(", "));
+    }
     let ctx = match context(&c.device) {
         Ok(ctx) => ctx,
         Err(e) => {
@@ -1113,7 +1194,8 @@ fn reference(c: ReferenceCmd) -> Result<()> {
         ..Default::default()
     };
     let (w, h, spp) = (settings.width, settings.height, settings.spp);
-    let scene = scene_with_sun(&scene_path, &c.sun)?;
+    let mut scene = scene_with_sun(&scene_path, &c.sun)?;
+    c.camera.apply(&mut scene)?;
     if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.is_emissive()) {
         eprintln!(
             "warning: {}: no lights and no emission; the image is black",
@@ -1222,6 +1304,7 @@ fn bench(c: BenchCmd) -> Result<()> {
         accumulate: c.accumulate,
         validate: c.device.validate,
         memory_budget: c.device.budget_bytes(),
+        view: c.camera.view(),
         device: c.device.device,
         command_line: voxgi::bench::shell_words(
             &std::iter::once("voxgi".to_string())

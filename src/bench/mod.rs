@@ -52,6 +52,8 @@ pub struct BenchOptions {
     pub device: Option<String>,
     /// `--memory-budget`, bytes.
     pub memory_budget: Option<u64>,
+    /// `--camera` or `--eye`/`--target`: the view instead of the file's.
+    pub view: Option<crate::scene::ViewSpec>,
     /// The command line, quoted in results.md.
     pub command_line: String,
 }
@@ -75,6 +77,7 @@ impl Default for BenchOptions {
             validate: false,
             device: None,
             memory_budget: None,
+            view: None,
             command_line: String::new(),
         }
     }
@@ -287,7 +290,14 @@ fn reference(
         .cache_dir
         .clone()
         .unwrap_or_else(|| opts.out_dir.join("cache"));
-    let key = reference_key(scene_bytes, &opts.extra_lights, &settings);
+    let mut key = reference_key(scene_bytes, &opts.extra_lights, &settings);
+    // A view asked for (--camera, --eye): its own references; without one the keys stay.
+    if let Some(v) = &opts.view {
+        key = format!(
+            "v{:016x}-{key}",
+            Fnv::new().bytes(format!("{v:?}").as_bytes()).0
+        );
+    }
     let path = dir.join(format!("reference-{key}.exr"));
     let var_path = dir.join(format!("reference-{key}-var.exr"));
     if path.exists() {
@@ -575,6 +585,9 @@ pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
         eprintln!("warning: {w}");
     }
     scene.lights.extend(opts.extra_lights.iter().cloned());
+    if let Some(v) = &opts.view {
+        scene.set_view(v).map_err(BenchError::Options)?;
+    }
     if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.is_emissive()) {
         eprintln!(
             "warning: {}: no lights and no emission; every image is black",

@@ -9,7 +9,9 @@ use super::accessor::Buffers;
 use super::animation::{Animation, Channel, Interpolation, Node, Property};
 use super::geometry::{self, RawPrimitive, Topology};
 use super::material::load_materials;
-use super::{Aabb, Camera, Instance, Light, LightKind, Material, Primitive, Scene, SceneError};
+use super::{
+    Aabb, Camera, Instance, Light, LightKind, Material, Primitive, Scene, SceneCamera, SceneError,
+};
 use super::{Vertex, DEFAULT_YFOV_DEGREES};
 use glam::{DMat4, DVec3, Mat4, Quat, Vec2, Vec3, Vec4};
 use gltf::json;
@@ -78,7 +80,7 @@ fn load_inner(path: &Path) -> Result<Scene, String> {
         lights: Vec::new(),
         mesh_cache: HashMap::new(),
         default_material_used: false,
-        camera_node: None,
+        camera_nodes: Vec::new(),
         morph_warned: false,
         skin_warned: false,
         origin: DVec3::ZERO,
@@ -101,7 +103,7 @@ fn load_inner(path: &Path) -> Result<Scene, String> {
         instances,
         lights,
         default_material_used,
-        camera_node,
+        camera_nodes,
         mut warnings,
         origin,
         nodes,
@@ -120,8 +122,27 @@ fn load_inner(path: &Path) -> Result<Scene, String> {
                 .transformed(&i.world),
         )
     });
-    let camera = camera_node
-        .and_then(|(cam, world)| file_camera(&root, cam, world, &bounds, &mut warnings))
+    // The first camera met is the view; a problem with another one is said only when it is
+    // asked for (`--camera`).
+    let cameras: Vec<SceneCamera> = camera_nodes
+        .iter()
+        .enumerate()
+        .map(|(k, &(index, world))| {
+            let mut problems = Vec::new();
+            let camera = file_camera(&root, index, world, &bounds, &mut problems);
+            if k == 0 {
+                warnings.extend(problems.iter().cloned());
+            }
+            SceneCamera {
+                index,
+                name: root.cameras.get(index).and_then(|c| c.name.clone()),
+                camera: camera.ok_or_else(|| problems.join("; ")),
+            }
+        })
+        .collect();
+    let camera = cameras
+        .first()
+        .and_then(|c| c.camera.clone().ok())
         .unwrap_or_else(|| default_camera(&bounds));
 
     Ok(Scene {
@@ -134,6 +155,7 @@ fn load_inner(path: &Path) -> Result<Scene, String> {
         textures,
         lights,
         camera,
+        cameras,
         bounds,
         origin,
         nodes,
@@ -475,8 +497,9 @@ struct Loader<'a> {
     /// glTF mesh index -> the scene primitives made from it (a mesh is stored once).
     mesh_cache: HashMap<usize, Vec<u32>>,
     default_material_used: bool,
-    /// First camera met: (camera index, node world matrix).
-    camera_node: Option<(usize, Mat4)>,
+    /// Each camera of the file with the first node met that uses it: (camera index, node
+    /// world matrix), in the order met.
+    camera_nodes: Vec<(usize, Mat4)>,
     morph_warned: bool,
     skin_warned: bool,
     /// Each node's translation and matrix in f64.
@@ -717,8 +740,8 @@ impl Loader<'_> {
                 ));
             }
             if let Some(cam) = node.camera {
-                if self.camera_node.is_none() {
-                    self.camera_node = Some((cam.value(), world));
+                if self.camera_nodes.iter().all(|c| c.0 != cam.value()) {
+                    self.camera_nodes.push((cam.value(), world));
                 }
             }
             if let Some(l) = node

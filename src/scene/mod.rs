@@ -196,6 +196,30 @@ pub struct Light {
     pub direction: Vec3,
 }
 
+/// A view asked for on the command line: one of the file's cameras, or an eye and a target.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ViewSpec {
+    /// `--camera NAME|INDEX`.
+    Camera(String),
+    /// `--eye X,Y,Z --target X,Y,Z [--up X,Y,Z] [--fov DEG]`, in the file's coordinates.
+    LookAt {
+        eye: glam::DVec3,
+        target: glam::DVec3,
+        up: Vec3,
+        yfov_deg: Option<f32>,
+    },
+}
+
+/// One of the file's cameras.
+#[derive(Clone, Debug)]
+pub struct SceneCamera {
+    /// Its index in the file's `cameras`.
+    pub index: usize,
+    pub name: Option<String>,
+    /// The camera, or why it cannot be used (orthographic, a degenerate node, ...).
+    pub camera: Result<Camera, String>,
+}
+
 #[derive(Clone, Debug)]
 pub struct Camera {
     pub name: Option<String>,
@@ -282,7 +306,11 @@ pub struct Scene {
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
     pub lights: Vec<Light>,
+    /// The view: the file's first camera met, or the CONVENTIONS.md default.
     pub camera: Camera,
+    /// Every camera of the file that a node uses, placed by the first such node, in the
+    /// order met (`--camera` picks one).
+    pub cameras: Vec<SceneCamera>,
     /// World bounds of all instances (EMPTY for an empty scene).
     pub bounds: Aabb,
     /// The file's coordinates of this scene's (0, 0, 0), the centre of the meshes' nodes in whole
@@ -298,6 +326,101 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// Views the scene as `view` says.
+    pub fn set_view(&mut self, view: &ViewSpec) -> Result<(), String> {
+        match view {
+            ViewSpec::Camera(spec) => self.use_camera(spec),
+            ViewSpec::LookAt {
+                eye,
+                target,
+                up,
+                yfov_deg,
+            } => self.look_from(*eye, *target, *up, *yfov_deg),
+        }
+    }
+
+    /// Views the scene through the file's camera named `spec`, or of index `spec` in the
+    /// file's `cameras`; an error names the file and the cameras it has.
+    pub fn use_camera(&mut self, spec: &str) -> Result<(), String> {
+        let by_index = spec.trim().parse::<usize>().ok();
+        let found = self.cameras.iter().find(|c| match by_index {
+            Some(i) => c.index == i,
+            None => c.name.as_deref() == Some(spec),
+        });
+        let Some(found) = found else {
+            let have: Vec<String> = self
+                .cameras
+                .iter()
+                .map(|c| match &c.name {
+                    Some(n) => format!("{} ({n:?})", c.index),
+                    None => c.index.to_string(),
+                })
+                .collect();
+            return Err(format!(
+                "{}: no camera {spec:?} (the cameras its nodes use: {})",
+                self.source.display(),
+                if have.is_empty() {
+                    "none".to_string()
+                } else {
+                    have.join(", ")
+                }
+            ));
+        };
+        match &found.camera {
+            Ok(c) => {
+                self.camera = c.clone();
+                Ok(())
+            }
+            Err(why) => Err(format!("{}: {why}", self.source.display())),
+        }
+    }
+
+    /// Views the scene from `eye` towards `target` (the file's coordinates, in f64 as
+    /// `Scene::origin` is) with `up` and a vertical field of view of `yfov_deg` degrees (the
+    /// current camera's when None). The near plane is a thousandth of the distance to the
+    /// target at most, the far plane holds the whole scene.
+    pub fn look_from(
+        &mut self,
+        eye: glam::DVec3,
+        target: glam::DVec3,
+        up: Vec3,
+        yfov_deg: Option<f32>,
+    ) -> Result<(), String> {
+        let (e, t) = (
+            (eye - self.origin).as_vec3(),
+            (target - self.origin).as_vec3(),
+        );
+        let dir = t - e;
+        let yfov = yfov_deg.map_or(self.camera.yfov, f32::to_radians);
+        if !(e.is_finite() && t.is_finite() && up.is_finite()) {
+            return Err("--eye, --target and --up must be finite".into());
+        }
+        if dir.length() <= 0.0 || dir.normalize().cross(up).length() < 1e-4 {
+            return Err(
+                "--target must differ from --eye, and --up must not lie along the view".into(),
+            );
+        }
+        if !(yfov > 0.0 && yfov < std::f32::consts::PI) {
+            return Err("--fov must lie between 0 and 180 degrees".into());
+        }
+        let znear = self.camera.znear.min(1e-3 * dir.length()).max(1e-6);
+        let mut zfar = self.camera.zfar.max(znear * 1000.0);
+        if !self.bounds.is_empty() {
+            for c in self.bounds.corners() {
+                zfar = zfar.max(2.0 * e.distance(c));
+            }
+        }
+        self.camera = Camera {
+            name: None,
+            world: glam::Mat4::look_at_rh(e, t, up).inverse(),
+            yfov,
+            znear,
+            zfar,
+            is_default: false,
+        };
+        Ok(())
+    }
+
     pub fn triangle_count(&self) -> usize {
         self.instances
             .iter()

@@ -40,6 +40,7 @@ pub fn empty_scene() -> Scene {
         origin: glam::DVec3::ZERO,
         nodes: vec![],
         animations: vec![],
+        cameras: vec![],
         warnings: vec![],
     }
 }
