@@ -858,7 +858,7 @@ fn soak(c: SoakCmd) -> Result<()> {
         );
     }
     let (settings, mut scene, motion) = c.show.load()?;
-    // No --spin and no animation: the first node with a mesh that a spin can turn.
+    // No --spin and no animation: the first node with a mesh.
     let motion = voxgi::soak::moving_something(&scene, motion).ok_or_else(|| {
         anyhow!(
             "{}: no node with a mesh that can be moved (give --spin NODE)",

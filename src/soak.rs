@@ -236,16 +236,12 @@ pub fn run(
 }
 
 /// What moves when the scene and the options move nothing: a spin of the first node with a
-/// mesh that a spin can turn (None if there is none).
+/// mesh (None if there is none).
 pub fn moving_something(scene: &Scene, motion: Motion) -> Option<Motion> {
     if motion.moves(scene) {
         return Some(motion);
     }
-    let node = scene
-        .instances
-        .iter()
-        .map(|i| i.node)
-        .find(|&n| scene.nodes[n].matrix.is_none())?;
+    let node = scene.instances.first()?.node;
     Some(Motion {
         spin: Some(crate::scene::Spin {
             node,

@@ -108,3 +108,36 @@ fn a_spin_turns_a_node_and_its_children_about_its_own_vertical_axis() {
         "{e}"
     );
 }
+
+#[test]
+fn a_node_placed_by_a_matrix_spins_about_the_vertical_through_its_origin() {
+    use voxgi::scene::builder::*;
+    // A unit cube placed by a matrix that scales it unevenly and moves it to (2, 0, 0).
+    let mut b = SceneBuilder::new();
+    let m = b.add_material(MaterialDesc::lambertian("white", [0.8; 3]));
+    let cube = b.add_mesh("cube", vec![unit_cube(Some(m))]);
+    let placed = Mat4::from_translation(Vec3::new(2.0, 0.0, 0.0))
+        * Mat4::from_scale(Vec3::new(1.0, 2.0, 0.5));
+    b.add_node(
+        NodeDesc::new("placed")
+            .mesh(cube)
+            .matrix(placed.to_cols_array()),
+    );
+    let dir = common::temp_dir("anim-matrix-spin");
+    let path = dir.join("matrix.gltf");
+    b.write(&path).unwrap();
+    let s = load(&path).unwrap();
+    let motion = Motion {
+        spin: Some(s.spin("placed").unwrap()),
+        animate: false,
+    };
+    // 90 degrees per second: after 1 s the node's local +X (1 m: its x scale is 1) lies 1 m
+    // along -Z of its origin, which stays put, and its local +Y keeps the scale of 2.
+    let world = motion.pose(&s, 1.0)[0].1;
+    let origin = Vec3::new(2.0, 0.0, 0.0) - s.origin.as_vec3();
+    assert!(world.transform_point3(Vec3::ZERO).distance(origin) < 1e-5);
+    let p = world.transform_point3(Vec3::X);
+    assert!(p.distance(origin + Vec3::NEG_Z) < 1e-5, "{p:?}");
+    let q = world.transform_point3(Vec3::Y);
+    assert!(q.distance(origin + 2.0 * Vec3::Y) < 1e-5, "{q:?}");
+}

@@ -197,12 +197,6 @@ impl Scene {
     /// A spin of the node named `name`, or an error naming the file and the problem.
     pub fn spin(&self, name: &str) -> Result<Spin, String> {
         let node = self.node_named(name)?;
-        if self.nodes[node].matrix.is_some() {
-            return Err(format!(
-                "{}: node {name:?} is placed by a matrix, which cannot be spun about its origin",
-                self.source.display()
-            ));
-        }
         Ok(Spin {
             node,
             degrees_per_second: SPIN_DEGREES_PER_SECOND,
@@ -298,7 +292,19 @@ impl Motion {
         let local = |i: usize| -> DMat4 {
             let node = &scene.nodes[i];
             if let Some(m) = node.matrix {
-                return m;
+                // A matrix need not split into translation, rotation and scale: turned as a
+                // whole about the vertical through its origin.
+                return match self.spin.as_ref().filter(|s| s.node == i) {
+                    Some(s) => {
+                        let angle = (s.degrees_per_second as f64 * t as f64).to_radians();
+                        let at = m.w_axis.truncate();
+                        DMat4::from_translation(at)
+                            * DMat4::from_rotation_y(angle)
+                            * DMat4::from_translation(-at)
+                            * m
+                    }
+                    None => m,
+                };
             }
             let mut r = r_of[i].unwrap_or(node.rotation).as_dquat();
             if let Some(s) = self.spin.as_ref().filter(|s| s.node == i) {
