@@ -58,6 +58,10 @@ pub const CONTROLS: &[(&str, &str)] = &[
     ("P", "pause / resume animations and the spin"),
     ("- / =", "exposure down / up one stop"),
     ("T", "print the per-pass timings"),
+    (
+        "K",
+        "print the camera as the options that render it (--eye, --target, --fov)",
+    ),
     ("F12", "save a screenshot (voxgi-view-N.png)"),
     ("H", "print these controls"),
     ("Esc", "quit"),
@@ -337,6 +341,34 @@ fn print_controls() {
     }
 }
 
+/// The fly camera as `--eye X,Y,Z --target X,Y,Z --up X,Y,Z --fov DEG` in the file's
+/// coordinates, for `voxgi render` and the others to view the scene as the window does (the up
+/// direction keeps a file camera's roll until the camera moves).
+pub fn camera_options(camera: &FlyCamera, scene: &Scene) -> String {
+    let c = camera.camera();
+    let eye = c.world.w_axis.truncate().as_dvec3() + scene.origin;
+    let forward = (-c.world.z_axis.truncate()).normalize().as_dvec3();
+    let up = c.world.y_axis.truncate().normalize().as_dvec3();
+    // Micrometres and micro-radians: what f32 world positions near the origin hold.
+    let num = |x: f64| {
+        let s = format!("{x:.6}");
+        let s = s.trim_end_matches('0').trim_end_matches('.');
+        if s == "-0" {
+            "0".to_string()
+        } else {
+            s.to_string()
+        }
+    };
+    let p = |v: glam::DVec3| format!("{},{},{}", num(v.x), num(v.y), num(v.z));
+    format!(
+        "--eye {} --target {} --up {} --fov {}",
+        p(eye),
+        p(eye + forward),
+        p(up),
+        num(c.yfov.to_degrees() as f64)
+    )
+}
+
 fn print_timings(r: &Renderer) {
     match &r.timer {
         Some(t) => print!("{}", t.report()),
@@ -512,6 +544,10 @@ impl App {
                 if let Some(live) = self.win.as_ref().and_then(|w| w.live.as_ref()) {
                     print_timings(&live.renderer);
                 }
+                changed = false;
+            }
+            KeyCode::KeyK => {
+                println!("{}", camera_options(&self.camera, &self.opts.scene));
                 changed = false;
             }
             KeyCode::F12 => {
