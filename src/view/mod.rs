@@ -60,7 +60,7 @@ pub const CONTROLS: &[(&str, &str)] = &[
     ("T", "print the per-pass timings"),
     (
         "K",
-        "print the camera as the options that render it (--eye, --target, --fov)",
+        "print the camera as the options that render it (--eye, --target, --up, --fov)",
     ),
     ("F12", "save a screenshot (voxgi-view-N.png)"),
     ("H", "print these controls"),
