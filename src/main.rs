@@ -907,13 +907,13 @@ fn soak(c: SoakCmd) -> Result<()> {
         output::write_bytes_atomic(path, csv.as_bytes())?;
     }
     println!(
-        "{} frames in {:.0} s: host memory slope {:.2} bytes/frame ({:+.3}% over the run after \
-         its first tenth), GPU memory change {} bytes, timing entries at most {}, \
-         {} non-finite frame(s), {} validation message(s){}",
+        "{} frames in {:.0} s: host memory {:+.3}% (the median of the last fifth against the \
+         first, after the run's first tenth; slope {:.2} bytes/frame), GPU memory change {} \
+         bytes, timing entries at most {}, {} non-finite frame(s), {} validation message(s){}",
         c.frames,
         report.seconds,
-        report.host_slope(),
         100.0 * report.host_growth(),
+        report.host_slope(),
         report.gpu_change(),
         report.max_timing_entries(),
         report.non_finite_frames,
