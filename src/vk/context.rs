@@ -290,76 +290,262 @@ fn missing_requirements(
     missing
 }
 
+/// The physical device chosen and what the context keeps of it.
+struct Chosen {
+    physical_device: vk::PhysicalDevice,
+    properties: vk::PhysicalDeviceProperties,
+    queue_family: u32,
+    timestamp_valid_bits: u32,
+}
+
+/// The instance, with the validation layer (and synchronization validation) when asked, and
+/// whether VK_EXT_debug_utils is on.
+fn create_instance(entry: &ash::Entry, desc: &ContextDesc) -> VkResult<(ash::Instance, bool)> {
+    let layers = unsafe { entry.enumerate_instance_layer_properties() }.unwrap_or_default();
+    let has_validation = layers
+        .iter()
+        .any(|l| l.layer_name_as_c_str().ok() == Some(VALIDATION_LAYER));
+    if desc.validate && !has_validation {
+        return Err(VkError::NoValidationLayer);
+    }
+    let inst_exts =
+        unsafe { entry.enumerate_instance_extension_properties(None) }.unwrap_or_default();
+    let has_debug_utils = inst_exts
+        .iter()
+        .any(|e| e.extension_name_as_c_str().ok() == Some(ext::debug_utils::NAME));
+
+    let mut ext_names: Vec<*const i8> = desc
+        .instance_extensions
+        .iter()
+        .map(|e| e.as_ptr())
+        .collect();
+    if has_debug_utils {
+        ext_names.push(ext::debug_utils::NAME.as_ptr());
+    }
+    let layer_names: Vec<*const i8> = if desc.validate {
+        vec![VALIDATION_LAYER.as_ptr()]
+    } else {
+        vec![]
+    };
+    let app_info = vk::ApplicationInfo::default()
+        .application_name(c"voxgi")
+        .engine_name(c"voxgi")
+        .api_version(vk::API_VERSION_1_3);
+    let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
+    let mut validation_features =
+        vk::ValidationFeaturesEXT::default().enabled_validation_features(&enables);
+    let mut info = vk::InstanceCreateInfo::default()
+        .application_info(&app_info)
+        .enabled_extension_names(&ext_names)
+        .enabled_layer_names(&layer_names);
+    if desc.validate {
+        info = info.push_next(&mut validation_features);
+    }
+    let instance = unsafe { entry.create_instance(&info, None) }.check("vkCreateInstance")?;
+    Ok((instance, has_debug_utils))
+}
+
+/// The messenger that counts and prints validation messages into `stats` (none without
+/// VK_EXT_debug_utils).
+fn create_messenger(
+    entry: &ash::Entry,
+    instance: &ash::Instance,
+    has_debug_utils: bool,
+    stats: *const MessageStats,
+) -> VkResult<(
+    Option<ext::debug_utils::Instance>,
+    vk::DebugUtilsMessengerEXT,
+)> {
+    if !has_debug_utils {
+        return Ok((None, vk::DebugUtilsMessengerEXT::null()));
+    }
+    let di = ext::debug_utils::Instance::new(entry, instance);
+    let minfo = vk::DebugUtilsMessengerCreateInfoEXT::default()
+        .message_severity(
+            vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+        )
+        .message_type(
+            vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+        )
+        .pfn_user_callback(Some(debug_callback))
+        .user_data(stats as *mut c_void);
+    let m = unsafe { di.create_debug_utils_messenger(&minfo, None) }
+        .check("vkCreateDebugUtilsMessengerEXT")?;
+    Ok((Some(di), m))
+}
+
+/// The device named by `desc.device` (or any), a GPU before a CPU implementation, that has
+/// everything the renderer needs; otherwise an error naming what the best one lacks.
+fn choose_physical_device(instance: &ash::Instance, desc: &ContextDesc) -> VkResult<Chosen> {
+    let pds = match unsafe { instance.enumerate_physical_devices() } {
+        Ok(p) if !p.is_empty() => p,
+        Ok(_) => {
+            return Err(VkError::NoDevice(
+                "the Vulkan loader found no device (is mesa-vulkan-drivers installed?)".into(),
+            ))
+        }
+        Err(r) => {
+            return Err(VkError::Call {
+                call: "vkEnumeratePhysicalDevices",
+                result: r,
+            })
+        }
+    };
+    let mut candidates: Vec<(vk::PhysicalDevice, vk::PhysicalDeviceProperties)> = pds
+        .iter()
+        .map(|&pd| (pd, unsafe { instance.get_physical_device_properties(pd) }))
+        .collect();
+    if let Some(want) = &desc.device {
+        let want_l = want.to_lowercase();
+        let names: Vec<String> = candidates.iter().map(|(_, p)| device_name(p)).collect();
+        candidates.retain(|(_, p)| device_name(p).to_lowercase().contains(&want_l));
+        if candidates.is_empty() {
+            return Err(VkError::NoDevice(format!(
+                "no device name contains {want:?}; the devices are: {}",
+                names.join(", ")
+            )));
+        }
+    }
+    // Prefer a real GPU over a CPU implementation.
+    candidates.sort_by_key(|(_, p)| device_rank(p.device_type));
+
+    let mut rejected = Vec::new();
+    for (pd, props) in &candidates {
+        let missing = missing_requirements(instance, *pd, props, &desc.device_extensions);
+        let families = unsafe { instance.get_physical_device_queue_family_properties(*pd) };
+        let family = families.iter().position(|q| {
+            q.queue_flags
+                .contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)
+        });
+        match (missing.is_empty(), family) {
+            (true, Some(fam)) => {
+                return Ok(Chosen {
+                    physical_device: *pd,
+                    properties: *props,
+                    queue_family: fam as u32,
+                    timestamp_valid_bits: families[fam].timestamp_valid_bits,
+                })
+            }
+            (_, None) => rejected.push((device_name(props), "a graphics+compute queue".into())),
+            (false, _) => rejected.push((device_name(props), missing.join(", "))),
+        }
+    }
+    let (device, missing) = rejected.remove(0);
+    Err(VkError::Missing { device, missing })
+}
+
+/// The driver's name and version, and the largest single allocation.
+fn driver_and_max_allocation(instance: &ash::Instance, pd: vk::PhysicalDevice) -> (String, u64) {
+    let mut drv = vk::PhysicalDeviceDriverProperties::default();
+    let mut m3 = vk::PhysicalDeviceMaintenance3Properties::default();
+    let mut p2 = vk::PhysicalDeviceProperties2::default()
+        .push_next(&mut drv)
+        .push_next(&mut m3);
+    unsafe { instance.get_physical_device_properties2(pd, &mut p2) };
+    let name = drv
+        .driver_name_as_c_str()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let info = drv
+        .driver_info_as_c_str()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    (
+        format!("{name} {info}").trim().to_string(),
+        m3.max_memory_allocation_size,
+    )
+}
+
+/// The logical device with the features the passes use and one graphics+compute queue.
+fn create_logical_device(
+    instance: &ash::Instance,
+    chosen: &Chosen,
+    extensions: &[CString],
+) -> VkResult<ash::Device> {
+    let priorities = [1.0f32];
+    let queue_infos = [vk::DeviceQueueCreateInfo::default()
+        .queue_family_index(chosen.queue_family)
+        .queue_priorities(&priorities)];
+    let features = vk::PhysicalDeviceFeatures::default()
+        .geometry_shader(true)
+        .fragment_stores_and_atomics(true)
+        .sampler_anisotropy(true)
+        .depth_clamp(true);
+    let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
+        .host_query_reset(true)
+        .scalar_block_layout(true)
+        .buffer_device_address(true);
+    let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
+        .dynamic_rendering(true)
+        .synchronization2(true);
+    let dev_ext_ptrs: Vec<*const i8> = extensions.iter().map(|e| e.as_ptr()).collect();
+    let dinfo = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&queue_infos)
+        .enabled_features(&features)
+        .enabled_extension_names(&dev_ext_ptrs)
+        .push_next(&mut f12)
+        .push_next(&mut f13);
+    unsafe { instance.create_device(chosen.physical_device, &dinfo, None) }.check("vkCreateDevice")
+}
+
+/// The GPU allocator (leaks are reported by Context::drop, not by it).
+fn create_allocator(
+    instance: &ash::Instance,
+    device: &ash::Device,
+    physical_device: vk::PhysicalDevice,
+) -> VkResult<Allocator> {
+    Allocator::new(&AllocatorCreateDesc {
+        instance: instance.clone(),
+        device: device.clone(),
+        physical_device,
+        debug_settings: AllocatorDebugSettings {
+            log_leaks_on_shutdown: false,
+            ..Default::default()
+        },
+        // The voxel sums are reached by address (glsl/voxel_common.glsl).
+        buffer_device_address: true,
+        allocation_sizes: Default::default(),
+    })
+    .map_err(|e| VkError::Alloc {
+        name: "allocator".into(),
+        size: 0,
+        in_use: 0,
+        budget: None,
+        error: e,
+    })
+}
+
+/// The command pool of the one-shot helper.
+fn create_one_shot_pool(device: &ash::Device, queue_family: u32) -> VkResult<vk::CommandPool> {
+    let pool_info = vk::CommandPoolCreateInfo::default()
+        .queue_family_index(queue_family)
+        .flags(vk::CommandPoolCreateFlags::TRANSIENT);
+    unsafe { device.create_command_pool(&pool_info, None) }.check("vkCreateCommandPool")
+}
+
 impl Context {
+    /// The instance, the messenger, the device and its queue, the allocator and the one-shot
+    /// command pool, in that order; a step that fails frees the ones before it.
     pub fn new(desc: &ContextDesc) -> VkResult<Arc<Context>> {
         let entry = unsafe { ash::Entry::load() }.map_err(|e| VkError::Loader(e.to_string()))?;
-
-        let layers = unsafe { entry.enumerate_instance_layer_properties() }.unwrap_or_default();
-        let has_validation = layers
-            .iter()
-            .any(|l| l.layer_name_as_c_str().ok() == Some(VALIDATION_LAYER));
-        if desc.validate && !has_validation {
-            return Err(VkError::NoValidationLayer);
-        }
-        let inst_exts =
-            unsafe { entry.enumerate_instance_extension_properties(None) }.unwrap_or_default();
-        let has_debug_utils = inst_exts
-            .iter()
-            .any(|e| e.extension_name_as_c_str().ok() == Some(ext::debug_utils::NAME));
-
-        let mut ext_names: Vec<*const i8> = desc
-            .instance_extensions
-            .iter()
-            .map(|e| e.as_ptr())
-            .collect();
-        if has_debug_utils {
-            ext_names.push(ext::debug_utils::NAME.as_ptr());
-        }
-        let layer_names: Vec<*const i8> = if desc.validate {
-            vec![VALIDATION_LAYER.as_ptr()]
-        } else {
-            vec![]
-        };
-        let app_info = vk::ApplicationInfo::default()
-            .application_name(c"voxgi")
-            .engine_name(c"voxgi")
-            .api_version(vk::API_VERSION_1_3);
-        let enables = [vk::ValidationFeatureEnableEXT::SYNCHRONIZATION_VALIDATION];
-        let mut validation_features =
-            vk::ValidationFeaturesEXT::default().enabled_validation_features(&enables);
-        let mut info = vk::InstanceCreateInfo::default()
-            .application_info(&app_info)
-            .enabled_extension_names(&ext_names)
-            .enabled_layer_names(&layer_names);
-        if desc.validate {
-            info = info.push_next(&mut validation_features);
-        }
-        let instance = unsafe { entry.create_instance(&info, None) }.check("vkCreateInstance")?;
-
+        let (instance, has_debug_utils) = create_instance(&entry, desc)?;
         let stats = Arc::new(MessageStats::default());
         let stats_ptr = Arc::into_raw(stats.clone());
-        let (debug_instance, messenger) = if has_debug_utils {
-            let di = ext::debug_utils::Instance::new(&entry, &instance);
-            let minfo = vk::DebugUtilsMessengerCreateInfoEXT::default()
-                .message_severity(
-                    vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
-                        | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
-                )
-                .message_type(
-                    vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
-                        | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
-                        | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
-                )
-                .pfn_user_callback(Some(debug_callback))
-                .user_data(stats_ptr as *mut c_void);
-            let m = unsafe { di.create_debug_utils_messenger(&minfo, None) }
-                .check("vkCreateDebugUtilsMessengerEXT")?;
-            (Some(di), m)
-        } else {
-            (None, vk::DebugUtilsMessengerEXT::null())
-        };
-
-        // From here on, a failure must free what was made: build a partial guard.
+        let (debug_instance, messenger) =
+            match create_messenger(&entry, &instance, has_debug_utils, stats_ptr) {
+                Ok(m) => m,
+                Err(e) => {
+                    unsafe {
+                        drop(Arc::from_raw(stats_ptr));
+                        instance.destroy_instance(None);
+                    }
+                    return Err(e);
+                }
+            };
+        // From here on, a failure frees what was made.
         let fail = |e: VkError| -> VkError {
             unsafe {
                 if let Some(di) = &debug_instance {
@@ -370,165 +556,35 @@ impl Context {
             }
             e
         };
-
-        let pds = match unsafe { instance.enumerate_physical_devices() } {
-            Ok(p) if !p.is_empty() => p,
-            Ok(_) => {
-                return Err(fail(VkError::NoDevice(
-                    "the Vulkan loader found no device (is mesa-vulkan-drivers installed?)".into(),
-                )))
-            }
-            Err(r) => {
-                return Err(fail(VkError::Call {
-                    call: "vkEnumeratePhysicalDevices",
-                    result: r,
-                }))
-            }
-        };
-        let mut candidates: Vec<(vk::PhysicalDevice, vk::PhysicalDeviceProperties)> = pds
-            .iter()
-            .map(|&pd| (pd, unsafe { instance.get_physical_device_properties(pd) }))
-            .collect();
-        if let Some(want) = &desc.device {
-            let want_l = want.to_lowercase();
-            let names: Vec<String> = candidates.iter().map(|(_, p)| device_name(p)).collect();
-            candidates.retain(|(_, p)| device_name(p).to_lowercase().contains(&want_l));
-            if candidates.is_empty() {
-                return Err(fail(VkError::NoDevice(format!(
-                    "no device name contains {want:?}; the devices are: {}",
-                    names.join(", ")
-                ))));
-            }
-        }
-        // Prefer a real GPU over a CPU implementation.
-        candidates.sort_by_key(|(_, p)| device_rank(p.device_type));
-
-        let mut rejected = Vec::new();
-        let mut chosen = None;
-        for (pd, props) in &candidates {
-            let missing = missing_requirements(&instance, *pd, props, &desc.device_extensions);
-            let families = unsafe { instance.get_physical_device_queue_family_properties(*pd) };
-            let family = families.iter().position(|q| {
-                q.queue_flags
-                    .contains(vk::QueueFlags::GRAPHICS | vk::QueueFlags::COMPUTE)
-            });
-            match (missing.is_empty(), family) {
-                (true, Some(fam)) => {
-                    chosen = Some((*pd, *props, fam as u32, families[fam].timestamp_valid_bits));
-                    break;
-                }
-                (_, None) => rejected.push((device_name(props), "a graphics+compute queue".into())),
-                (false, _) => rejected.push((device_name(props), missing.join(", "))),
-            }
-        }
-        let Some((physical_device, properties, queue_family, timestamp_valid_bits)) = chosen else {
-            let (device, missing) = rejected.remove(0);
-            return Err(fail(VkError::Missing { device, missing }));
-        };
-
-        let (driver, max_allocation) = {
-            let mut drv = vk::PhysicalDeviceDriverProperties::default();
-            let mut m3 = vk::PhysicalDeviceMaintenance3Properties::default();
-            let mut p2 = vk::PhysicalDeviceProperties2::default()
-                .push_next(&mut drv)
-                .push_next(&mut m3);
-            unsafe { instance.get_physical_device_properties2(physical_device, &mut p2) };
-            let name = drv
-                .driver_name_as_c_str()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            let info = drv
-                .driver_info_as_c_str()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_default();
-            (
-                format!("{name} {info}").trim().to_string(),
-                m3.max_memory_allocation_size,
-            )
-        };
+        let chosen = choose_physical_device(&instance, desc).map_err(fail)?;
+        let (driver, max_allocation) = driver_and_max_allocation(&instance, chosen.physical_device);
         let device_info = DeviceInfo {
-            name: device_name(&properties),
-            kind: properties.device_type,
-            api_version: properties.api_version,
+            name: device_name(&chosen.properties),
+            kind: chosen.properties.device_type,
+            api_version: chosen.properties.api_version,
             driver,
         };
-
-        let priorities = [1.0f32];
-        let queue_infos = [vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(queue_family)
-            .queue_priorities(&priorities)];
-        let features = vk::PhysicalDeviceFeatures::default()
-            .geometry_shader(true)
-            .fragment_stores_and_atomics(true)
-            .sampler_anisotropy(true)
-            .depth_clamp(true);
-        let mut f12 = vk::PhysicalDeviceVulkan12Features::default()
-            .host_query_reset(true)
-            .scalar_block_layout(true)
-            .buffer_device_address(true);
-        let mut f13 = vk::PhysicalDeviceVulkan13Features::default()
-            .dynamic_rendering(true)
-            .synchronization2(true);
-        let dev_ext_ptrs: Vec<*const i8> =
-            desc.device_extensions.iter().map(|e| e.as_ptr()).collect();
-        let dinfo = vk::DeviceCreateInfo::default()
-            .queue_create_infos(&queue_infos)
-            .enabled_features(&features)
-            .enabled_extension_names(&dev_ext_ptrs)
-            .push_next(&mut f12)
-            .push_next(&mut f13);
-        let device = match unsafe { instance.create_device(physical_device, &dinfo, None) } {
-            Ok(d) => d,
-            Err(r) => {
-                return Err(fail(VkError::Call {
-                    call: "vkCreateDevice",
-                    result: r,
-                }))
-            }
-        };
-        let queue = unsafe { device.get_device_queue(queue_family, 0) };
-        let debug_device = debug_instance
-            .as_ref()
-            .map(|_| ext::debug_utils::Device::new(&instance, &device));
-
-        let allocator = match Allocator::new(&AllocatorCreateDesc {
-            instance: instance.clone(),
-            device: device.clone(),
-            physical_device,
-            debug_settings: AllocatorDebugSettings {
-                log_leaks_on_shutdown: false, // reported by Context::drop instead
-                ..Default::default()
-            },
-            // The voxel sums are reached by address (glsl/voxel_common.glsl).
-            buffer_device_address: true,
-            allocation_sizes: Default::default(),
-        }) {
+        let device =
+            create_logical_device(&instance, &chosen, &desc.device_extensions).map_err(fail)?;
+        let allocator = match create_allocator(&instance, &device, chosen.physical_device) {
             Ok(a) => a,
             Err(e) => {
                 unsafe { device.destroy_device(None) };
-                return Err(fail(VkError::Alloc {
-                    name: "allocator".into(),
-                    size: 0,
-                    in_use: 0,
-                    budget: None,
-                    error: e,
-                }));
+                return Err(fail(e));
             }
         };
-        let pool_info = vk::CommandPoolCreateInfo::default()
-            .queue_family_index(queue_family)
-            .flags(vk::CommandPoolCreateFlags::TRANSIENT);
-        let one_shot_pool = match unsafe { device.create_command_pool(&pool_info, None) } {
+        let one_shot_pool = match create_one_shot_pool(&device, chosen.queue_family) {
             Ok(p) => p,
-            Err(r) => {
+            Err(e) => {
                 drop(allocator);
                 unsafe { device.destroy_device(None) };
-                return Err(fail(VkError::Call {
-                    call: "vkCreateCommandPool",
-                    result: r,
-                }));
+                return Err(fail(e));
             }
         };
+        let queue = unsafe { device.get_device_queue(chosen.queue_family, 0) };
+        let debug_device = debug_instance
+            .as_ref()
+            .map(|_| ext::debug_utils::Device::new(&instance, &device));
 
         Ok(Arc::new(Context {
             entry,
@@ -537,15 +593,15 @@ impl Context {
             messenger,
             stats_ptr,
             stats,
-            physical_device,
+            physical_device: chosen.physical_device,
             device_info,
-            properties,
+            properties: chosen.properties,
             max_allocation,
             device,
             debug_device,
-            queue_family,
+            queue_family: chosen.queue_family,
             queue,
-            timestamp_valid_bits,
+            timestamp_valid_bits: chosen.timestamp_valid_bits,
             validating: desc.validate,
             allocator: ManuallyDrop::new(Mutex::new(allocator)),
             memory_budget: desc.memory_budget,
