@@ -216,11 +216,35 @@ pub fn load_materials(
     base: &Path,
     warnings: &mut Vec<String>,
 ) -> (Vec<Material>, Vec<Texture>) {
+    warn_of_sourceless_textures(root, warnings);
     let mut keys = TextureKeys {
         root,
         keys: Vec::new(),
         lookup: HashMap::new(),
     };
+    let all_slots: Vec<Slots> = root
+        .materials
+        .iter()
+        .enumerate()
+        .map(|(i, m)| material_slots(i, m, &mut keys, warnings))
+        .collect();
+    let (textures, key_texture) = make_textures(root, buffers, base, &keys.keys, warnings);
+    let tex_ref = |slot: Slot| -> Option<TexRef> {
+        let (k, tex_coord) = slot?;
+        key_texture[k].map(|texture| TexRef { texture, tex_coord })
+    };
+    let materials = root
+        .materials
+        .iter()
+        .zip(all_slots)
+        .enumerate()
+        .map(|(i, (m, slots))| material(i, m, &slots, &tex_ref, warnings))
+        .collect();
+    (materials, textures)
+}
+
+/// Warns of textures whose image is missing or given only by an unsupported extension.
+fn warn_of_sourceless_textures(root: &json::Root, warnings: &mut Vec<String>) {
     for (t, tex) in root.textures.iter().enumerate() {
         let image = tex.source.value();
         // gltf-json marks a texture without `source` with u32::MAX.
@@ -237,43 +261,58 @@ pub fn load_materials(
             ));
         }
     }
-    let mut all_slots = Vec::with_capacity(root.materials.len());
-    for (i, m) in root.materials.iter().enumerate() {
-        let label = material_label(i, m);
-        let pbr = &m.pbr_metallic_roughness;
-        let spec = m.extensions.as_ref().and_then(|e| e.specular.as_ref());
-        let mut slot = |i: Option<(json::Index<json::Texture>, u32)>, srgb: bool, what: &str| {
-            keys.slot(i, srgb, what, &label, warnings)
-        };
-        all_slots.push(Slots {
-            base_color: slot(info(&pbr.base_color_texture), true, "base colour"),
-            metallic_roughness: slot(
-                info(&pbr.metallic_roughness_texture),
-                false,
-                "metallic-roughness",
-            ),
-            normal: slot(
-                m.normal_texture.as_ref().map(|n| (n.index, n.tex_coord)),
-                false,
-                "normal",
-            ),
-            emissive: slot(info(&m.emissive_texture), true, "emissive"),
-            specular: slot(
-                spec.and_then(|s| info(&s.specular_texture)),
-                false,
-                "specular",
-            ),
-            specular_color: slot(
-                spec.and_then(|s| info(&s.specular_color_texture)),
-                true,
-                "specular colour",
-            ),
-        });
-    }
+}
 
-    // Decode each image once, whatever number of colour spaces it is used in.
+/// Material `i`'s texture slots, each a key (texture, colour space) of `keys`.
+fn material_slots(
+    i: usize,
+    m: &json::Material,
+    keys: &mut TextureKeys<'_>,
+    warnings: &mut Vec<String>,
+) -> Slots {
+    let label = material_label(i, m);
+    let pbr = &m.pbr_metallic_roughness;
+    let spec = m.extensions.as_ref().and_then(|e| e.specular.as_ref());
+    let mut slot = |i: Option<(json::Index<json::Texture>, u32)>, srgb: bool, what: &str| {
+        keys.slot(i, srgb, what, &label, warnings)
+    };
+    Slots {
+        base_color: slot(info(&pbr.base_color_texture), true, "base colour"),
+        metallic_roughness: slot(
+            info(&pbr.metallic_roughness_texture),
+            false,
+            "metallic-roughness",
+        ),
+        normal: slot(
+            m.normal_texture.as_ref().map(|n| (n.index, n.tex_coord)),
+            false,
+            "normal",
+        ),
+        emissive: slot(info(&m.emissive_texture), true, "emissive"),
+        specular: slot(
+            spec.and_then(|s| info(&s.specular_texture)),
+            false,
+            "specular",
+        ),
+        specular_color: slot(
+            spec.and_then(|s| info(&s.specular_color_texture)),
+            true,
+            "specular colour",
+        ),
+    }
+}
+
+/// One texture per key (texture, colour space), each image decoded once whatever number of
+/// colour spaces it is used in; and per key its index among them (None where the image did
+/// not decode).
+fn make_textures(
+    root: &json::Root,
+    buffers: &Buffers,
+    base: &Path,
+    keys: &[(usize, bool)],
+    warnings: &mut Vec<String>,
+) -> (Vec<Texture>, Vec<Option<u32>>) {
     let mut needed: Vec<usize> = keys
-        .keys
         .iter()
         .map(|&(t, _)| root.textures[t].source.value())
         .collect();
@@ -281,15 +320,14 @@ pub fn load_materials(
     needed.dedup();
     let mut decoded = decode_images(root, buffers, base, &needed, warnings);
     let mut uses: HashMap<usize, usize> = HashMap::new();
-    for &(t, _) in &keys.keys {
+    for &(t, _) in keys {
         *uses.entry(root.textures[t].source.value()).or_default() += 1;
     }
 
     let mut textures = Vec::new();
-    let mut key_texture: Vec<Option<u32>> = Vec::with_capacity(keys.keys.len());
-    for &(t, srgb) in &keys.keys {
-        let tex = &root.textures[t];
-        let image = tex.source.value();
+    let mut key_texture: Vec<Option<u32>> = Vec::with_capacity(keys.len());
+    for &(t, srgb) in keys {
+        let image = root.textures[t].source.value();
         let left = uses.get_mut(&image).map(|u| {
             *u -= 1;
             *u
@@ -308,147 +346,158 @@ pub fn load_materials(
             key_texture.push(None);
             continue;
         };
-        let sampler = match tex.sampler {
-            Some(s) => match root.samplers.get(s.value()) {
-                Some(s) => Some(s),
-                None => {
-                    warnings.push(format!(
-                        "texture {t} uses sampler {}, which does not exist; default sampler used",
-                        s.value()
-                    ));
-                    None
-                }
-            },
-            None => None,
-        };
-        let default_sampler = json::texture::Sampler::default();
-        let sampler = sampler.unwrap_or(&default_sampler);
-        let name = tex
-            .name
-            .clone()
-            .or_else(|| root.images[image].name.clone())
-            .or_else(|| {
-                root.images[image]
-                    .uri
-                    .clone()
-                    .filter(|u| !u.starts_with("data:"))
-            })
-            .unwrap_or_else(|| format!("texture {t}"));
         key_texture.push(Some(textures.len() as u32));
-        textures.push(Texture {
-            name,
-            width: pixels.width,
-            height: pixels.height,
-            rgba8: pixels.rgba8,
-            srgb,
-            wrap_s: wrap(sampler.wrap_s),
-            wrap_t: wrap(sampler.wrap_t),
-            mag_nearest: matches!(sampler.mag_filter, Some(Checked::Valid(MagFilter::Nearest))),
-            min_nearest: matches!(
-                sampler.min_filter,
-                Some(Checked::Valid(
-                    MinFilter::Nearest
-                        | MinFilter::NearestMipmapNearest
-                        | MinFilter::NearestMipmapLinear
-                ))
-            ),
-        });
+        textures.push(texture(root, t, srgb, pixels, warnings));
     }
+    (textures, key_texture)
+}
 
-    let tex_ref = |slot: Slot| -> Option<TexRef> {
-        let (k, tex_coord) = slot?;
-        key_texture[k].map(|texture| TexRef { texture, tex_coord })
-    };
-    let materials = root
-        .materials
-        .iter()
-        .zip(all_slots)
-        .enumerate()
-        .map(|(i, (m, slots))| {
-            let mut changed = false;
-            let pbr = &m.pbr_metallic_roughness;
-            let bc = pbr.base_color_factor.0;
-            let base_color = Vec4::new(
-                fix(bc[0], 1.0, 0.0, 1.0, &mut changed),
-                fix(bc[1], 1.0, 0.0, 1.0, &mut changed),
-                fix(bc[2], 1.0, 0.0, 1.0, &mut changed),
-                fix(bc[3], 1.0, 0.0, 1.0, &mut changed),
-            );
-            let strength = m
-                .extensions
-                .as_ref()
-                .and_then(|e| e.emissive_strength.as_ref())
-                .map_or(1.0, |s| s.emissive_strength.0);
-            let strength = fix(strength, 1.0, 0.0, f32::MAX, &mut changed);
-            let ef = m.emissive_factor.0;
-            let emissive = Vec3::new(
-                fix(ef[0], 0.0, 0.0, f32::MAX, &mut changed),
-                fix(ef[1], 0.0, 0.0, f32::MAX, &mut changed),
-                fix(ef[2], 0.0, 0.0, f32::MAX, &mut changed),
-            ) * strength;
-            let spec = m.extensions.as_ref().and_then(|e| e.specular.as_ref());
-            let specular_factor = spec.map_or(1.0, |s| s.specular_factor.0);
-            let sc = spec.map_or([1.0; 3], |s| s.specular_color_factor.0);
-            let alpha_mode = match m.alpha_mode {
-                Checked::Valid(json::material::AlphaMode::Opaque) => AlphaMode::Opaque,
-                Checked::Valid(json::material::AlphaMode::Blend) => AlphaMode::Blend,
-                Checked::Valid(json::material::AlphaMode::Mask) => AlphaMode::Mask(fix(
-                    m.alpha_cutoff.map_or(0.5, |c| c.0),
-                    0.5,
-                    0.0,
-                    f32::MAX,
-                    &mut changed,
-                )),
-                Checked::Invalid => {
-                    warnings.push(format!(
-                        "{} has an unknown alphaMode; treated as OPAQUE",
-                        material_label(i, m)
-                    ));
-                    AlphaMode::Opaque
-                }
-            };
-            let material = Material {
-                name: m.name.clone(),
-                base_color,
-                base_color_tex: tex_ref(slots.base_color),
-                metallic: fix(pbr.metallic_factor.0, 1.0, 0.0, 1.0, &mut changed),
-                roughness: fix(pbr.roughness_factor.0, 1.0, 0.0, 1.0, &mut changed),
-                metallic_roughness_tex: tex_ref(slots.metallic_roughness),
-                normal_tex: tex_ref(slots.normal),
-                normal_scale: fix(
-                    m.normal_texture.as_ref().map_or(1.0, |n| n.scale),
-                    1.0,
-                    f32::MIN,
-                    f32::MAX,
-                    &mut changed,
-                ),
-                // Emission is radiance: infinite values would blow up every pixel they touch.
-                emissive: if emissive.is_finite() {
-                    emissive
-                } else {
-                    changed = true;
-                    Vec3::ZERO
-                },
-                emissive_tex: tex_ref(slots.emissive),
-                specular_factor: fix(specular_factor, 1.0, 0.0, f32::MAX, &mut changed),
-                specular_tex: tex_ref(slots.specular),
-                specular_color: Vec3::new(
-                    fix(sc[0], 1.0, 0.0, f32::MAX, &mut changed),
-                    fix(sc[1], 1.0, 0.0, f32::MAX, &mut changed),
-                    fix(sc[2], 1.0, 0.0, f32::MAX, &mut changed),
-                ),
-                specular_color_tex: tex_ref(slots.specular_color),
-                alpha_mode,
-                double_sided: m.double_sided,
-            };
-            if changed {
+/// Texture `t` in one colour space, with its sampler's wrap and filters and a name.
+fn texture(
+    root: &json::Root,
+    t: usize,
+    srgb: bool,
+    pixels: Decoded,
+    warnings: &mut Vec<String>,
+) -> Texture {
+    let tex = &root.textures[t];
+    let image = tex.source.value();
+    let sampler = match tex.sampler {
+        Some(s) => match root.samplers.get(s.value()) {
+            Some(s) => Some(s),
+            None => {
                 warnings.push(format!(
-                    "{} has non-finite or out-of-range factors; clamped to valid values",
-                    material_label(i, m)
+                    "texture {t} uses sampler {}, which does not exist; default sampler used",
+                    s.value()
                 ));
+                None
             }
-            material
+        },
+        None => None,
+    };
+    let default_sampler = json::texture::Sampler::default();
+    let sampler = sampler.unwrap_or(&default_sampler);
+    let name = tex
+        .name
+        .clone()
+        .or_else(|| root.images[image].name.clone())
+        .or_else(|| {
+            root.images[image]
+                .uri
+                .clone()
+                .filter(|u| !u.starts_with("data:"))
         })
-        .collect();
-    (materials, textures)
+        .unwrap_or_else(|| format!("texture {t}"));
+    Texture {
+        name,
+        width: pixels.width,
+        height: pixels.height,
+        rgba8: pixels.rgba8,
+        srgb,
+        wrap_s: wrap(sampler.wrap_s),
+        wrap_t: wrap(sampler.wrap_t),
+        mag_nearest: matches!(sampler.mag_filter, Some(Checked::Valid(MagFilter::Nearest))),
+        min_nearest: matches!(
+            sampler.min_filter,
+            Some(Checked::Valid(
+                MinFilter::Nearest
+                    | MinFilter::NearestMipmapNearest
+                    | MinFilter::NearestMipmapLinear
+            ))
+        ),
+    }
+}
+
+/// Material `i` from its JSON, its slots' textures through `tex_ref`; non-finite or
+/// out-of-range factors are clamped with a warning.
+fn material(
+    i: usize,
+    m: &json::Material,
+    slots: &Slots,
+    tex_ref: &dyn Fn(Slot) -> Option<TexRef>,
+    warnings: &mut Vec<String>,
+) -> Material {
+    let mut changed = false;
+    let pbr = &m.pbr_metallic_roughness;
+    let bc = pbr.base_color_factor.0;
+    let base_color = Vec4::new(
+        fix(bc[0], 1.0, 0.0, 1.0, &mut changed),
+        fix(bc[1], 1.0, 0.0, 1.0, &mut changed),
+        fix(bc[2], 1.0, 0.0, 1.0, &mut changed),
+        fix(bc[3], 1.0, 0.0, 1.0, &mut changed),
+    );
+    let strength = m
+        .extensions
+        .as_ref()
+        .and_then(|e| e.emissive_strength.as_ref())
+        .map_or(1.0, |s| s.emissive_strength.0);
+    let strength = fix(strength, 1.0, 0.0, f32::MAX, &mut changed);
+    let ef = m.emissive_factor.0;
+    let emissive = Vec3::new(
+        fix(ef[0], 0.0, 0.0, f32::MAX, &mut changed),
+        fix(ef[1], 0.0, 0.0, f32::MAX, &mut changed),
+        fix(ef[2], 0.0, 0.0, f32::MAX, &mut changed),
+    ) * strength;
+    let spec = m.extensions.as_ref().and_then(|e| e.specular.as_ref());
+    let specular_factor = spec.map_or(1.0, |s| s.specular_factor.0);
+    let sc = spec.map_or([1.0; 3], |s| s.specular_color_factor.0);
+    let alpha_mode = match m.alpha_mode {
+        Checked::Valid(json::material::AlphaMode::Opaque) => AlphaMode::Opaque,
+        Checked::Valid(json::material::AlphaMode::Blend) => AlphaMode::Blend,
+        Checked::Valid(json::material::AlphaMode::Mask) => AlphaMode::Mask(fix(
+            m.alpha_cutoff.map_or(0.5, |c| c.0),
+            0.5,
+            0.0,
+            f32::MAX,
+            &mut changed,
+        )),
+        Checked::Invalid => {
+            warnings.push(format!(
+                "{} has an unknown alphaMode; treated as OPAQUE",
+                material_label(i, m)
+            ));
+            AlphaMode::Opaque
+        }
+    };
+    let material = Material {
+        name: m.name.clone(),
+        base_color,
+        base_color_tex: tex_ref(slots.base_color),
+        metallic: fix(pbr.metallic_factor.0, 1.0, 0.0, 1.0, &mut changed),
+        roughness: fix(pbr.roughness_factor.0, 1.0, 0.0, 1.0, &mut changed),
+        metallic_roughness_tex: tex_ref(slots.metallic_roughness),
+        normal_tex: tex_ref(slots.normal),
+        normal_scale: fix(
+            m.normal_texture.as_ref().map_or(1.0, |n| n.scale),
+            1.0,
+            f32::MIN,
+            f32::MAX,
+            &mut changed,
+        ),
+        // Emission is radiance: infinite values would blow up every pixel they touch.
+        emissive: if emissive.is_finite() {
+            emissive
+        } else {
+            changed = true;
+            Vec3::ZERO
+        },
+        emissive_tex: tex_ref(slots.emissive),
+        specular_factor: fix(specular_factor, 1.0, 0.0, f32::MAX, &mut changed),
+        specular_tex: tex_ref(slots.specular),
+        specular_color: Vec3::new(
+            fix(sc[0], 1.0, 0.0, f32::MAX, &mut changed),
+            fix(sc[1], 1.0, 0.0, f32::MAX, &mut changed),
+            fix(sc[2], 1.0, 0.0, f32::MAX, &mut changed),
+        ),
+        specular_color_tex: tex_ref(slots.specular_color),
+        alpha_mode,
+        double_sided: m.double_sided,
+    };
+    if changed {
+        warnings.push(format!(
+            "{} has non-finite or out-of-range factors; clamped to valid values",
+            material_label(i, m)
+        ));
+    }
+    material
 }
