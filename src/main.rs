@@ -75,6 +75,18 @@ enum Command {
     /// validation messages, the frames with NaN or Inf pixels and the NaN or Inf voxels left in
     /// the volumes, per scene and mode; exit status 1 if any is not 0.
     ValidationSweep(SweepCmd),
+    /// Print a shell completion script (bash, zsh or fish)
+    ///
+    /// bash: `source <(voxgi completions bash)`; zsh: `voxgi completions zsh > ~/.zfunc/_voxgi`
+    /// (with ~/.zfunc in fpath); fish: `voxgi completions fish > ~/.config/fish/completions/voxgi.fish`.
+    Completions(CompletionsCmd),
+}
+
+#[derive(Args)]
+struct CompletionsCmd {
+    /// bash, zsh or fish
+    #[arg(value_parser = ["bash", "zsh", "fish"])]
+    shell: String,
 }
 
 /// `--bounces B`: 1 to MAX_BOUNCES.
@@ -1024,6 +1036,19 @@ fn validation_sweep(c: SweepCmd) -> Result<()> {
     Ok(())
 }
 
+/// `voxgi completions SHELL`: the script, from the command line's own definitions.
+fn completions(c: CompletionsCmd) -> Result<()> {
+    use clap::CommandFactory;
+    use clap_complete::Shell;
+    let shell = match c.shell.as_str() {
+        "bash" => Shell::Bash,
+        "zsh" => Shell::Zsh,
+        _ => Shell::Fish,
+    };
+    clap_complete::generate(shell, &mut Cli::command(), "voxgi", &mut std::io::stdout());
+    Ok(())
+}
+
 fn info(c: InfoCmd) -> Result<()> {
     let scene_path = match c.scene.as_slice() {
         [s] => s.clone(),
@@ -1442,6 +1467,7 @@ fn main() -> ExitCode {
         Command::HardCases(c) => hard_cases(c),
         Command::Soak(c) => soak(c),
         Command::ValidationSweep(c) => validation_sweep(c),
+        Command::Completions(c) => completions(c),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -208,3 +208,34 @@ fn a_lost_device_is_a_clear_error_that_frees_everything() {
         assert!(!wrote, "an image was written");
     }
 }
+
+#[test]
+fn completions_generate_for_each_shell_from_the_command_line() {
+    for shell in ["bash", "zsh", "fish"] {
+        let (ok, script, err) = voxgi(&["completions", shell]);
+        assert!(ok, "{shell}: {err}");
+        for word in [
+            "render",
+            "validation-sweep",
+            "eye",
+            "memory-budget",
+            "spin-speed",
+        ] {
+            assert!(script.contains(word), "{shell}: no {word}");
+        }
+    }
+    // The bash script parses and registers the completion.
+    let (_, script, _) = voxgi(&["completions", "bash"]);
+    let dir = temp_dir("completions");
+    let path = dir.join("voxgi.bash");
+    std::fs::write(&path, script).unwrap();
+    let o = std::process::Command::new("bash")
+        .arg("-c")
+        .arg(format!("source {} && complete -p voxgi", path.display()))
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success() && out.contains("voxgi"), "{out}");
+    let (ok, _, err) = voxgi(&["completions", "powershell"]);
+    assert!(!ok && err.contains("powershell"), "{err}");
+}
