@@ -620,13 +620,21 @@ impl Context {
         desc: &gpu_allocator::vulkan::AllocationCreateDesc<'_>,
     ) -> VkResult<gpu_allocator::vulkan::Allocation> {
         let mut allocator = self.allocator();
-        let in_use = allocator.generate_report().total_allocated_bytes;
+        // The report lists every allocation by name: made only for a budget or a failure.
+        let in_use = |a: &Allocator| a.generate_report().total_allocated_bytes;
         let size = desc.requirements.size;
-        let over_budget = self.memory_budget.is_some_and(|b| in_use + size > b);
+        let over_budget = self
+            .memory_budget
+            .is_some_and(|b| in_use(&allocator) + size > b);
         let result = if over_budget {
             Err(gpu_allocator::AllocationError::OutOfMemory)
         } else {
             allocator.allocate(desc)
+        };
+        let in_use = if result.is_err() {
+            in_use(&allocator)
+        } else {
+            0
         };
         result.map_err(|error| VkError::Alloc {
             name: desc.name.into(),
