@@ -152,6 +152,14 @@ pub struct Spin {
     pub degrees_per_second: f32,
 }
 
+impl Spin {
+    /// The turn about +Y after `t` seconds, radians (f64: hours in, the angle keeps its
+    /// micro-radians).
+    pub fn angle(&self, t: f32) -> f64 {
+        (self.degrees_per_second as f64 * t as f64).to_radians()
+    }
+}
+
 /// What moves in a scene: its animations (all of them play, looped over the longest) and
 /// an optional spin.
 #[derive(Clone, Debug, Default)]
@@ -296,10 +304,9 @@ impl Motion {
                 // whole about the vertical through its origin.
                 return match self.spin.as_ref().filter(|s| s.node == i) {
                     Some(s) => {
-                        let angle = (s.degrees_per_second as f64 * t as f64).to_radians();
                         let at = m.w_axis.truncate();
                         DMat4::from_translation(at)
-                            * DMat4::from_rotation_y(angle)
+                            * DMat4::from_rotation_y(s.angle(t))
                             * DMat4::from_translation(-at)
                             * m
                     }
@@ -308,8 +315,7 @@ impl Motion {
             }
             let mut r = r_of[i].unwrap_or(node.rotation).as_dquat();
             if let Some(s) = self.spin.as_ref().filter(|s| s.node == i) {
-                let angle = (s.degrees_per_second as f64 * t as f64).to_radians();
-                r = DQuat::from_rotation_y(angle) * r;
+                r = DQuat::from_rotation_y(s.angle(t)) * r;
             }
             DMat4::from_scale_rotation_translation(
                 s_of[i].unwrap_or(node.scale).as_dvec3(),
