@@ -2,6 +2,7 @@
 //! on Vulkan.
 
 pub mod bench;
+pub mod console;
 pub mod gi;
 pub mod hard;
 pub mod metrics;

@@ -21,6 +21,12 @@ use voxgi::vk::{Context, ContextDesc};
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// More log lines on stderr: -v details, -vv everything (RUST_LOG overrides)
+    #[arg(short, long, action = clap::ArgAction::Count, global = true)]
+    verbose: u8,
+    /// Warnings and errors only on stderr, no progress bars
+    #[arg(short, long, global = true, conflicts_with = "verbose")]
+    quiet: bool,
 }
 
 #[derive(Subcommand)]
@@ -606,12 +612,9 @@ fn default_scene() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/cornell-box.gltf")
 }
 
+/// A scene, its warnings logged (by scene::load, with the file's name).
 fn load_scene(path: &Path) -> Result<Scene> {
-    let scene = scene::load(path)?;
-    for w in &scene.warnings {
-        eprintln!("warning: {w}");
-    }
-    Ok(scene)
+    Ok(scene::load(path)?)
 }
 
 fn context(device: &DeviceOpts) -> Result<std::sync::Arc<Context>> {
@@ -716,8 +719,8 @@ impl RenderOpts {
 /// A scene with nothing to light it renders black: say so rather than leave a user guessing.
 fn warn_if_unlit(scene: &Scene, path: &Path) {
     if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.is_emissive()) {
-        eprintln!(
-            "warning: {}: the scene has no lights and no emission; the image is black \
+        log::warn!(
+            "{}: the scene has no lights and no emission; the image is black \
              (--sun EL,AZ adds a light)",
             path.display()
         );
@@ -777,7 +780,7 @@ fn view(c: ViewCmd) -> Result<()> {
         device: c.device.device,
     })?;
     if let Some(ms) = report.median_frame_ms {
-        eprintln!(
+        log::info!(
             "{} frames, median frame time {ms:.1} ms (submit to fence)",
             report.frames
         );
@@ -822,15 +825,22 @@ fn render(c: RenderCmd) -> Result<()> {
     let ctx = context(&c.device)?;
     let stats = ctx.stats.clone();
     let validating = ctx.validating;
-    eprintln!("device: {}", ctx.device_info);
+    log::info!("device: {}", ctx.device_info);
     let image = {
         let mut renderer = Renderer::new(&ctx, &scene, settings)?;
         for (node, world) in motion.pose(&scene, time) {
             renderer.set_node_transform(node, world);
         }
+        let bar = if frames > 1 {
+            voxgi::console::bar(frames as u64, "rendering, frames")
+        } else {
+            indicatif::ProgressBar::hidden()
+        };
         for f in 0..frames {
             renderer.render(f + 1 == frames)?;
+            bar.inc(1);
         }
+        bar.finish_and_clear();
         if let Some(t) = &renderer.timer {
             print!("{}", t.report());
             let mut f = renderer.frame_ms.clone();
@@ -843,7 +853,7 @@ fn render(c: RenderCmd) -> Result<()> {
                 f.len()
             );
         } else if timings {
-            eprintln!("warning: the device has no timestamps; no timings");
+            log::warn!("the device has no timestamps; no timings");
         }
         RadianceImage {
             width,
@@ -857,7 +867,7 @@ fn render(c: RenderCmd) -> Result<()> {
         bail!("the rendered image has NaN or Inf pixels; nothing written");
     }
     output::save(&image, &out, c.show.exposure)?;
-    eprintln!("wrote {}", out.display());
+    log::info!("wrote {}", out.display());
     Ok(())
 }
 
@@ -880,12 +890,12 @@ fn soak(c: SoakCmd) -> Result<()> {
     let mut settings = settings;
     settings.dynamic_nodes = motion.prepare(&mut scene);
     if scene.lights.is_empty() {
-        eprintln!("note: the scene has no punctual light; only the node moves");
+        log::info!("the scene has no punctual light; only the node moves");
     }
     let ctx = context(&c.device)?;
     let stats = ctx.stats.clone();
     let validating = ctx.validating;
-    eprintln!("device: {}", ctx.device_info);
+    log::info!("device: {}", ctx.device_info);
     let opts = voxgi::soak::SoakOptions {
         frames: c.frames,
         sample_every: c.sample_every,
@@ -894,7 +904,7 @@ fn soak(c: SoakCmd) -> Result<()> {
     let report = {
         let mut renderer = Renderer::new(&ctx, &scene, settings)?;
         let report = voxgi::soak::run(&mut renderer, &scene, &motion, &opts, |s| {
-            eprintln!(
+            log::info!(
                 "frame {:>6}  host {:>8.1} MiB  GPU {:>7.1} MiB  timing entries {}",
                 s.frame,
                 s.host_bytes as f64 / 1048576.0,
@@ -950,13 +960,17 @@ fn validation_sweep(c: SweepCmd) -> Result<()> {
         device: c.device.clone(),
         ..Default::default()
     })?;
-    eprintln!("device: {}", ctx.device_info);
+    log::info!("device: {}", ctx.device_info);
     let mut table = String::from(
         "| scene | mode | messages (default / --paper) | frames with NaN or Inf | NaN or Inf \
          voxels | seconds |\n|---|---|---|---|---|---|\n",
     );
     let mut failed = Vec::new();
     let start = std::time::Instant::now();
+    let bar = voxgi::console::bar(
+        (c.scenes.len() * Mode::ALL.len() * 2) as u64,
+        "validation sweep, runs",
+    );
     for path in &c.scenes {
         let mut scene = load_scene(path)?;
         if scene.lights.is_empty() {
@@ -991,6 +1005,7 @@ fn validation_sweep(c: SweepCmd) -> Result<()> {
                     },
                     ..Default::default()
                 };
+                bar.inc(1);
                 let run = voxgi::soak::sweep_run(&ctx, &scene, &motion, settings, c.frames)
                     .with_context(|| format!("{} in {mode:?} mode", path.display()))?;
                 if run.messages + run.non_finite_frames as usize + run.non_finite_voxels > 0 {
@@ -1222,17 +1237,17 @@ fn reference(c: ReferenceCmd) -> Result<()> {
     let mut scene = scene_with_sun(&scene_path, &c.sun)?;
     c.camera.apply(&mut scene)?;
     if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.is_emissive()) {
-        eprintln!(
-            "warning: {}: no lights and no emission; the image is black",
+        log::warn!(
+            "{}: no lights and no emission; the image is black",
             scene_path.display()
         );
     }
     let r = voxgi::reference::render_full(&scene, &settings);
     if r.bad_samples > 0 {
-        eprintln!("warning: {} NaN/Inf samples were dropped", r.bad_samples);
+        log::warn!("{} NaN/Inf samples were dropped", r.bad_samples);
     }
     output::save(&r.image, &out, c.exposure)?;
-    eprintln!(
+    log::info!(
         "wrote {} ({w}x{h}, {spp} spp, {:.2} s)",
         out.display(),
         r.seconds
@@ -1370,10 +1385,13 @@ fn hard_cases(c: HardCasesCmd) -> Result<()> {
     env.tail = tail;
     env.ideal = c.ideal;
     let mut rows = Vec::new();
-    for case in CASES
+    let chosen: Vec<_> = CASES
         .iter()
         .filter(|k| c.names.is_empty() || c.names.iter().any(|n| n == k.name))
-    {
+        .collect();
+    let bar = voxgi::console::bar(chosen.len() as u64, "hard cases");
+    for case in chosen {
+        bar.inc(1);
         let paper = env.run(case, &env.settings(true));
         let default = env.run(case, &env.settings(false));
         eprintln!(
@@ -1456,6 +1474,11 @@ fn main() -> ExitCode {
             };
         }
     };
+    voxgi::console::init_logging(if cli.quiet {
+        -1
+    } else {
+        cli.verbose.min(2) as i8
+    });
     let result = match cli.command {
         Command::Render(c) => render(c),
         Command::View(c) => view(c),

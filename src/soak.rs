@@ -216,7 +216,9 @@ pub fn run(
     let start = std::time::Instant::now();
     let mut report = SoakReport::default();
     let every = opts.sample_every.max(1);
+    let bar = crate::console::bar(opts.frames as u64, "soak, frames");
     for f in 0..opts.frames {
+        bar.inc(1);
         for (node, world) in motion.pose(scene, f as f32 * opts.frame_seconds) {
             renderer.set_node_transform(node, world);
         }

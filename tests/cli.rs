@@ -239,3 +239,120 @@ fn completions_generate_for_each_shell_from_the_command_line() {
     let (ok, _, err) = voxgi(&["completions", "powershell"]);
     assert!(!ok && err.contains("powershell"), "{err}");
 }
+
+/// `voxgi` with extra environment variables. Returns (success, stderr).
+fn voxgi_env(args: &[&str], env: &[(&str, &str)]) -> (bool, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_voxgi"))
+        .args(args)
+        .env_remove("RUST_LOG")
+        .envs(env.iter().copied())
+        .output()
+        .expect("run voxgi");
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!stderr.contains("panicked"), "voxgi panicked:\n{stderr}");
+    (out.status.success(), stderr)
+}
+
+#[test]
+fn log_lines_follow_the_flags_and_rust_log_and_warnings_stay_warnings() {
+    let dir = temp_dir("log");
+    let unlit = common::animated_scene(&dir);
+    let out = dir.join("out.png");
+    let render = |scene: &std::path::Path, extra: &[&str], env: &[(&str, &str)]| {
+        let mut args = vec![
+            "render",
+            scene.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--width",
+            "16",
+            "--height",
+            "16",
+            "--voxels",
+            "16",
+            "--frames",
+            "2",
+        ];
+        args.extend_from_slice(extra);
+        let (ok, err) = voxgi_env(&args, env);
+        assert!(ok, "voxgi {args:?} failed:\n{err}");
+        err
+    };
+    let bundled = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/cornell-box.gltf");
+
+    let plain = render(&bundled, &[], &[]);
+    assert!(
+        plain.contains("wrote ") && plain.contains("device: "),
+        "{plain}"
+    );
+    assert!(
+        !plain.contains("debug "),
+        "debug lines without -v:\n{plain}"
+    );
+
+    let verbose = render(&bundled, &["-v"], &[]);
+    assert!(
+        verbose.contains("debug voxgi::scene::load: loaded ") && verbose.contains("wrote "),
+        "-v shows no details:\n{verbose}"
+    );
+    assert!(!verbose.contains("trace "), "trace lines at -v:\n{verbose}");
+
+    let traced = render(&bundled, &[], &[("RUST_LOG", "voxgi=trace")]);
+    assert!(
+        traced.contains("trace voxgi::render::renderer: frame of "),
+        "RUST_LOG=voxgi=trace shows no frames:\n{traced}"
+    );
+
+    let quiet = render(&bundled, &["-q"], &[]);
+    assert!(quiet.is_empty(), "-q printed more than warnings:\n{quiet}");
+
+    // The scene has no light: a warning, printed as one, even under -q.
+    for extra in [&[][..], &["-q"][..]] {
+        let warned = render(&unlit, extra, &[]);
+        assert!(
+            warned
+                .lines()
+                .any(|l| l.starts_with("warning: ") && l.contains("no lights")),
+            "no warning with {extra:?}:\n{warned}"
+        );
+    }
+}
+
+#[test]
+fn progress_bars_are_drawn_on_a_terminal_only() {
+    let dir = temp_dir("progress");
+    let out = dir.join("out.png");
+    let cmd = format!(
+        "{} render --out {} --width 32 --height 32 --voxels 16 --frames 40",
+        env!("CARGO_BIN_EXE_voxgi"),
+        out.display()
+    );
+    // util-linux's `script` runs the command on a pseudo-terminal (Debian's essential bsdutils).
+    let on_terminal = |extra: &str| {
+        let out = std::process::Command::new("script")
+            .args(["-qec", &format!("{cmd} {extra}"), "/dev/null"])
+            .env_remove("RUST_LOG")
+            .output()
+            .expect("run util-linux's script (package bsdutils)");
+        let text = String::from_utf8_lossy(&out.stdout).into_owned();
+        assert!(out.status.success(), "{cmd} {extra} failed:\n{text}");
+        text
+    };
+    let shown = on_terminal("");
+    assert!(
+        shown.contains("rendering, frames [") && shown.contains("/40"),
+        "no progress bar on a terminal:\n{shown}"
+    );
+    let quiet = on_terminal("-q");
+    assert!(
+        !quiet.contains("rendering, frames"),
+        "a bar under -q:\n{quiet}"
+    );
+    let args: Vec<&str> = cmd.split(' ').skip(1).collect();
+    let (ok, piped) = voxgi_env(&args, &[]);
+    assert!(ok, "{piped}");
+    assert!(
+        !piped.contains("rendering, frames") && piped.contains("wrote "),
+        "a bar on a pipe:\n{piped}"
+    );
+}

@@ -310,28 +310,27 @@ fn reference(
                     .ok()
                     .filter(|v| (v.width, v.height) == (img.width, img.height))
                     .map(|v| noise_rel_mse(&img, &v));
-                eprintln!("reference: cached {}", path.display());
+                log::info!("reference: cached {}", path.display());
                 return Ok((img, path, true, noise));
             }
-            Ok(img) => eprintln!(
-                "warning: {}: cached reference is {}x{} (or not finite); rendering it again",
+            Ok(img) => log::warn!(
+                "{}: cached reference is {}x{} (or not finite); rendering it again",
                 path.display(),
                 img.width,
                 img.height
             ),
-            Err(e) => eprintln!("warning: {e}; rendering the reference again"),
+            Err(e) => log::warn!("{e}; rendering the reference again"),
         }
     }
-    eprintln!(
+    log::info!(
         "reference: path tracing {}x{} at {} spp on the CPU",
-        opts.width, opts.height, opts.ref_spp
+        opts.width,
+        opts.height,
+        opts.ref_spp
     );
     let r = reference::render_full(scene, &settings);
     if r.bad_samples > 0 {
-        eprintln!(
-            "warning: the reference dropped {} NaN/Inf samples",
-            r.bad_samples
-        );
+        log::warn!("the reference dropped {} NaN/Inf samples", r.bad_samples);
     }
     std::fs::create_dir_all(&dir).map_err(|source| BenchError::Io {
         path: dir.clone(),
@@ -340,7 +339,7 @@ fn reference(
     // The variance first: a reference found in the cache then always has its variance.
     output::save(&r.variance, &var_path, 0.0)?;
     output::save(&r.image, &path, 0.0)?;
-    eprintln!("reference: {:.1} s, cached {}", r.seconds, path.display());
+    log::info!("reference: {:.1} s, cached {}", r.seconds, path.display());
     let noise = noise_rel_mse(&r.image, &r.variance);
     Ok((r.image, path, false, Some(noise)))
 }
@@ -525,9 +524,10 @@ fn path_tracer_curve(
             ms: (r.seconds - r.setup_seconds) * 1e3,
             rel_mse: m.rel_mse,
         };
-        eprintln!(
+        log::info!(
             "path tracer: {spp} spp {:.1} ms relMSE {:.5}",
-            point.ms, point.rel_mse
+            point.ms,
+            point.rel_mse
         );
         curve.push(point);
         if m.rel_mse <= target || spp * 2 > (opts.ref_spp / 2).max(1) {
@@ -582,15 +582,15 @@ pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
     })?;
     let mut scene = scene::load(&opts.scene)?;
     for w in &scene.warnings {
-        eprintln!("warning: {w}");
+        log::warn!("{w}");
     }
     scene.lights.extend(opts.extra_lights.iter().cloned());
     if let Some(v) = &opts.view {
         scene.set_view(v).map_err(BenchError::Options)?;
     }
     if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.is_emissive()) {
-        eprintln!(
-            "warning: {}: no lights and no emission; every image is black",
+        log::warn!(
+            "{}: no lights and no emission; every image is black",
             opts.scene.display()
         );
     }
@@ -603,16 +603,18 @@ pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
         ..Default::default()
     })?;
     let device = ctx.device_info.to_string();
-    eprintln!("device: {device}");
+    log::info!("device: {device}");
     if ctx.timestamp_valid_bits == 0 {
-        eprintln!("warning: the device has no timestamps; only frame wall times");
+        log::warn!("the device has no timestamps; only frame wall times");
     }
     let (reference, reference_path, reference_cached, reference_noise) =
         reference(&scene, opts, &scene_bytes)?;
 
     let n = settings.len();
     let mut rows = Vec::with_capacity(n);
+    let bar = crate::console::bar(n as u64, "bench, settings");
     for (k, setting) in settings.iter().enumerate() {
+        bar.inc(1);
         let fail = |reason: String| BenchError::Setting {
             label: setting.label.clone(),
             reason,
@@ -638,7 +640,7 @@ pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
             .map_err(|e| fail(e.to_string()))?;
         let moved = metrics::try_compare(&moving_image, &reference, opts.exposure)
             .map_err(|e| fail(e.to_string()))?;
-        eprintln!(
+        log::info!(
             "[{}/{n}] {:<28} still {:.1} ms  moving {:.1} ms  relit {:.1} ms  relMSE {:.5} \
              (moving {:.5}, relit {:.5})  FLIP {:.4}",
             k + 1,
@@ -693,7 +695,7 @@ pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
         pt_curve,
     };
     report::write_all(&results, &opts.out_dir)?;
-    eprintln!(
+    log::info!(
         "wrote {}/{{results.csv, results.json, results.md, pareto.png}}",
         opts.out_dir.display()
     );

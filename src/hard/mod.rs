@@ -177,7 +177,7 @@ impl Env {
         if let Some(dir) = dump_dir() {
             let keep = dir.join(format!("{name}.glb"));
             if let Err(e) = std::fs::copy(&path, &keep) {
-                eprintln!("VOXGI_HARD_DUMP: {}: {e}", keep.display());
+                log::warn!("VOXGI_HARD_DUMP: {}: {e}", keep.display());
             }
         }
         let scene = crate::scene::load(&path)?;
@@ -192,7 +192,7 @@ impl Env {
             let path = dir.join(format!("{:03}-{what}.exr", self.dumped));
             for p in [path.clone(), path.with_extension("png")] {
                 if let Err(e) = crate::output::save(img, &p, 0.0) {
-                    eprintln!("VOXGI_HARD_DUMP: {e}");
+                    log::warn!("VOXGI_HARD_DUMP: {e}");
                 }
             }
         }

@@ -20,10 +20,8 @@ use crate::scene::Scene;
 use glam::Vec3;
 use rayon::prelude::*;
 use sampling::{power_heuristic, Frame, Pcg32};
-use std::io::{IsTerminal, Write};
-use std::sync::atomic::{AtomicU64, AtomicUsize, Ordering};
-use std::sync::Mutex;
-use std::time::{Duration, Instant};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
 use world::{punctual, World};
 
 #[derive(Clone, Debug)]
@@ -44,7 +42,7 @@ pub struct ReferenceSettings {
     pub bounces: Option<u32>,
     /// Bounces before Russian roulette starts.
     pub rr_depth: u32,
-    /// A progress bar on stderr (only drawn when stderr is a terminal).
+    /// A progress bar on stderr (only drawn where `console::bars_shown`).
     pub progress: bool,
 }
 
@@ -90,7 +88,11 @@ pub fn render_full(scene: &Scene, settings: &ReferenceSettings) -> ReferenceOutp
     let camera = CameraRays::new(scene, w, h);
     let setup_seconds = start.elapsed().as_secs_f64();
     let bad = AtomicU64::new(0);
-    let progress = Progress::new(settings.progress && std::io::stderr().is_terminal(), h);
+    let progress = if settings.progress {
+        crate::console::bar(h as u64, &format!("path tracing {w}x{h}, {spp} spp, rows"))
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
     let mut rows: Vec<Vec<([f32; 3], [f32; 3])>> = vec![Vec::new(); h as usize];
     rows.par_iter_mut().enumerate().for_each(|(y, row)| {
         *row = (0..w)
@@ -123,9 +125,9 @@ pub fn render_full(scene: &Scene, settings: &ReferenceSettings) -> ReferenceOutp
                 (mean.map(|m| m as f32), var)
             })
             .collect();
-        progress.row_done();
+        progress.inc(1);
     });
-    progress.finish();
+    progress.finish_and_clear();
     let (pixels, variance) = rows.into_iter().flatten().unzip();
     ReferenceOutput {
         image: RadianceImage {
@@ -309,72 +311,6 @@ fn trace(world: &World, eye: Vec3, dir: Vec3, rng: &mut Pcg32, s: &ReferenceSett
         d = wi;
     }
     l
-}
-
-/// A progress bar on stderr, redrawn at most a few times a second.
-struct Progress {
-    enabled: bool,
-    total: u32,
-    done: AtomicUsize,
-    start: Instant,
-    last: Mutex<Instant>,
-}
-
-impl Progress {
-    fn new(enabled: bool, total: u32) -> Self {
-        let now = Instant::now();
-        Progress {
-            enabled,
-            total,
-            done: AtomicUsize::new(0),
-            start: now,
-            last: Mutex::new(now),
-        }
-    }
-
-    fn row_done(&self) {
-        let done = self.done.fetch_add(1, Ordering::Relaxed) + 1;
-        if !self.enabled {
-            return;
-        }
-        let Ok(mut last) = self.last.try_lock() else {
-            return;
-        };
-        if last.elapsed() < Duration::from_millis(200) {
-            return;
-        }
-        *last = Instant::now();
-        self.draw(done);
-    }
-
-    fn draw(&self, done: usize) {
-        let frac = done as f64 / self.total.max(1) as f64;
-        let elapsed = self.start.elapsed().as_secs_f64();
-        let left = if frac > 0.0 {
-            elapsed / frac - elapsed
-        } else {
-            0.0
-        };
-        let filled = (frac * 40.0) as usize;
-        let mut err = std::io::stderr().lock();
-        let _ = write!(
-            err,
-            "\r[{}{}] {:5.1}%  {:.1} s, {:.0} s left ",
-            "#".repeat(filled),
-            ".".repeat(40 - filled.min(40)),
-            frac * 100.0,
-            elapsed,
-            left
-        );
-        let _ = err.flush();
-    }
-
-    fn finish(&self) {
-        if self.enabled {
-            self.draw(self.total as usize);
-            eprintln!();
-        }
-    }
 }
 
 #[cfg(test)]

@@ -332,6 +332,18 @@ impl Renderer {
         } else {
             None
         };
+        log::debug!(
+            "renderer: {}x{}, {}, {} area lights, GPU memory in use {:.1} MiB",
+            settings.width,
+            settings.height,
+            gi.as_ref().map_or("no GI".to_string(), |_| format!(
+                "{}^3 voxels{}",
+                settings.gi.voxels,
+                if settings.gi.paper { " (--paper)" } else { "" }
+            )),
+            area_lights.len(),
+            ctx.allocated_bytes() as f64 / 1048576.0
+        );
         Ok(Renderer {
             camera: scene.camera.clone(),
             frame_ms: Vec::new(),
@@ -551,8 +563,10 @@ impl Renderer {
         self.commands.end()?;
         let start = std::time::Instant::now();
         let submitted = ctx.submit_and_wait_with(cmd, waits, signals);
-        self.frame_ms.push(start.elapsed().as_secs_f64() * 1e3);
+        let ms = start.elapsed().as_secs_f64() * 1e3;
+        self.frame_ms.push(ms);
         crate::vk::timing::keep_recent(&mut self.frame_ms);
+        log::trace!("frame of {ms:.1} ms: {}", self.recorded.join(", "));
         if let Some(t) = timer.as_mut() {
             t.collect()?;
         }

@@ -515,6 +515,7 @@ pub fn run(seeds: &[Seed], settings: &FuzzSettings) -> std::io::Result<FuzzRepor
     }
     drop(tx);
     let mut report = FuzzReport::default();
+    let bar = crate::console::bar(settings.cases, "fuzzing the loader, cases");
     let keep = |path: &Path, case: u64| -> PathBuf {
         let kept = settings.scratch.join(format!(
             "finding-{case}.{}",
@@ -527,6 +528,7 @@ pub fn run(seeds: &[Seed], settings: &FuzzSettings) -> std::io::Result<FuzzRepor
         match rx.recv_timeout(Duration::from_millis(100)) {
             Ok((case, s, mutation, path, outcome, took)) => {
                 report.cases += 1;
+                bar.inc(1);
                 report.slowest = report.slowest.max(took);
                 let seed = seeds[s].name.clone();
                 let mut finding = |kind, message: String| {

@@ -38,10 +38,20 @@ const GEOMETRY_COMPRESSION: &[&str] = &[
 
 /// Loads a glTF 2.0 scene (.gltf or .glb).
 pub fn load(path: &Path) -> Result<Scene, SceneError> {
+    let start = std::time::Instant::now();
     let scene = load_inner(path).map_err(|problem| SceneError {
         path: path.to_path_buf(),
         problem,
     })?;
+    log::debug!(
+        "loaded {} in {:.1} ms: {} triangles, {} instances, {} materials, {} lights",
+        path.display(),
+        start.elapsed().as_secs_f64() * 1e3,
+        scene.triangle_count(),
+        scene.instances.len(),
+        scene.materials.len(),
+        scene.lights.len()
+    );
     for w in &scene.warnings {
         log::warn!("{}: {w}", path.display());
     }

@@ -247,7 +247,7 @@ pub fn run(opts: ViewOptions) -> Result<ViewReport> {
         memory_budget: opts.memory_budget,
         ..Default::default()
     })?;
-    eprintln!("device: {}", ctx.device_info);
+    log::info!("device: {}", ctx.device_info);
     let stats = ctx.stats.clone();
 
     let mut opts = opts;
@@ -627,7 +627,7 @@ impl App {
             let renderer = match Renderer::new(&self.ctx, &self.opts.scene, settings) {
                 Ok(r) => r,
                 Err(e @ crate::vk::VkError::GridTooLarge { .. }) if self.voxels > 16 => {
-                    eprintln!("{e}");
+                    log::warn!("{e}");
                     self.voxels /= 2;
                     return Ok(false);
                 }
@@ -728,7 +728,7 @@ impl App {
                 .screenshot()
                 .ok_or_else(|| anyhow!("the screenshot was not read back"))?;
             save_png(&path, &shot)?;
-            eprintln!(
+            log::info!(
                 "saved {} ({}x{}, frame {})",
                 path.display(),
                 shot.width,

@@ -115,6 +115,16 @@ pub struct Context {
 unsafe impl Send for Context {}
 unsafe impl Sync for Context {}
 
+/// A validation message or a leak: through the logger as an error when one is installed
+/// (the command line's), else straight to stderr (tests and library users see it either way).
+fn report_error(line: &str) {
+    if log::max_level() == log::LevelFilter::Off {
+        eprintln!("{line}");
+    } else {
+        log::error!(target: "vulkan", "{line}");
+    }
+}
+
 unsafe extern "system" fn debug_callback(
     severity: vk::DebugUtilsMessageSeverityFlagsEXT,
     ty: vk::DebugUtilsMessageTypeFlagsEXT,
@@ -155,7 +165,7 @@ unsafe extern "system" fn debug_callback(
         return vk::FALSE;
     };
     let line = format!("vulkan {level} ({ty:?}){pass}: {message}");
-    eprintln!("{line}");
+    report_error(&line);
     stats.log.lock().unwrap().push(line);
     vk::FALSE
 }
@@ -751,7 +761,7 @@ impl Drop for Context {
             if !leaks.is_empty() {
                 // Counted as an error so that tests fail on leaks.
                 let line = format!("GPU memory leaked at shutdown: {}", leaks.join(", "));
-                eprintln!("{line}");
+                report_error(&line);
                 self.stats.errors.fetch_add(1, Ordering::SeqCst);
                 self.stats.log.lock().unwrap().push(line);
             }
