@@ -580,10 +580,8 @@ pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
         path: opts.scene.clone(),
         source,
     })?;
+    // scene::load logs its warnings.
     let mut scene = scene::load(&opts.scene)?;
-    for w in &scene.warnings {
-        log::warn!("{w}");
-    }
     scene.lights.extend(opts.extra_lights.iter().cloned());
     if let Some(v) = &opts.view {
         scene.set_view(v).map_err(BenchError::Options)?;

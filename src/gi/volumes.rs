@@ -189,107 +189,27 @@ impl Volumes {
         dynamic: bool,
     ) -> VkResult<Volumes> {
         let n = grid.resolution;
-        let voxels = (n as u64).pow(3);
         let mut info = Vec::new();
         check_grid_fits(ctx, grid, settings)?;
         let data = voxel_data(ctx, grid, settings, emissive, dynamic, &mut info)?;
 
-        let (format, texel) = if settings.paper {
-            (vk::Format::R8G8B8A8_UNORM, 4)
-        } else {
-            (vk::Format::R16G16B16A16_SFLOAT, 8)
-        };
-        let usage = vk::ImageUsageFlags::STORAGE
-            | vk::ImageUsageFlags::SAMPLED
-            | vk::ImageUsageFlags::TRANSFER_SRC;
-        let radiance = Image::new(ctx, "voxel radiance", ImageDesc::d3(format, n, usage))?;
-        info.push(VolumeInfo {
-            name: format!("voxel radiance ({format:?})"),
-            bytes: voxels * texel,
-        });
-        let emit_dir = if settings.paper {
-            None
-        } else {
-            let desc = ImageDesc::d3(
-                vk::Format::R8G8B8A8_SNORM,
-                n,
-                vk::ImageUsageFlags::STORAGE
-                    | vk::ImageUsageFlags::SAMPLED
-                    | vk::ImageUsageFlags::TRANSFER_SRC,
-            );
-            info.push(VolumeInfo {
-                name: "voxel light direction (RGBA8 signed)".into(),
-                bytes: voxels * 4,
-            });
-            Some(Image::new(ctx, "voxel light direction", desc)?)
-        };
-        let small_emission = if settings.paper {
-            None
-        } else {
-            // The bindings stay; a scene without emitters gets a one-texel stand-in.
-            let side = if emissive { n } else { 1 };
-            // Storage only: the inject pass writes it, the mip pass reads it, the readback copies it.
-            let desc = ImageDesc::d3(
-                vk::Format::R32_SFLOAT,
-                side,
-                vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
-            );
-            if emissive {
-                info.push(VolumeInfo {
-                    name: "voxel emission of small emitters (R32F)".into(),
-                    bytes: voxels * 4,
-                });
-            }
-            Some(Image::new(ctx, "voxel emission of small emitters", desc)?)
-        };
-        let m = grid.aniso_resolution();
-        let levels = grid.mip_levels();
-        let names = ["-X", "+X", "-Y", "+Y", "-Z", "+Z"];
-        let faces = names
-            .iter()
-            .map(|f| {
-                Image::new(
-                    ctx,
-                    &format!("directional volume {f}"),
-                    ImageDesc::d3(format, m, usage).mips(levels),
-                )
-            })
-            .collect::<VkResult<Vec<_>>>()?;
-        let mut face_bytes = 0u64;
-        for l in 0..levels {
-            face_bytes += ((m >> l).max(1) as u64).pow(3) * texel;
-        }
-        info.push(VolumeInfo {
-            name: format!("6 directional volumes, {m}^3 with {levels} mips"),
-            bytes: 6 * face_bytes,
-        });
-        // Beside the directional volumes, texel for texel (not for --paper).
-        let mut beside = |what: &str| -> VkResult<Option<Image>> {
-            if settings.paper {
-                return Ok(None);
-            }
-            let desc = ImageDesc::d3(vk::Format::R16G16B16A16_SFLOAT, m, usage).mips(levels);
-            info.push(VolumeInfo {
-                name: format!("directional {what}, {m}^3 with {levels} mips"),
-                bytes: face_bytes,
-            });
-            Image::new(ctx, &format!("directional {what}"), desc).map(Some)
-        };
-        let light_dir = beside("light direction")?;
-        let light_pos = beside("light position")?;
-        let empty_space = empty_space_volume(ctx, grid, settings, &mut info)?;
-        let sampler = Sampler::new(
+        let texels = Texels::of(settings);
+        let radiance = radiance_volume(ctx, n, texels, &mut info)?;
+        let emit_dir = light_direction_volume(ctx, n, settings, &mut info)?;
+        let small_emission = small_emission_volume(ctx, n, settings, emissive, &mut info)?;
+        let (faces, face_bytes) = directional_volumes(ctx, grid, texels, &mut info)?;
+        let light_dir = beside_directional(
             ctx,
-            &vk::SamplerCreateInfo::default()
-                .mag_filter(vk::Filter::LINEAR)
-                .min_filter(vk::Filter::LINEAR)
-                .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
-                .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_BORDER)
-                .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_BORDER)
-                .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_BORDER)
-                .border_color(vk::BorderColor::FLOAT_TRANSPARENT_BLACK)
-                .max_lod(vk::LOD_CLAMP_NONE),
+            grid,
+            settings,
+            face_bytes,
+            "light direction",
+            &mut info,
         )?;
+        let light_pos =
+            beside_directional(ctx, grid, settings, face_bytes, "light position", &mut info)?;
+        let empty_space = empty_space_volume(ctx, grid, settings, &mut info)?;
+        let sampler = volume_sampler(ctx)?;
         let [s, d] = data.tables();
         let words = [
             AddressTable::new(ctx, "static voxel word addresses", &s)?,
@@ -310,6 +230,165 @@ impl Volumes {
             info,
         })
     }
+}
+
+/// The radiance and directional volumes' texels: RGBA16F, or the paper's RGBA8.
+#[derive(Clone, Copy)]
+struct Texels {
+    format: vk::Format,
+    bytes: u64,
+}
+
+impl Texels {
+    fn of(settings: &GiSettings) -> Texels {
+        if settings.paper {
+            Texels {
+                format: vk::Format::R8G8B8A8_UNORM,
+                bytes: 4,
+            }
+        } else {
+            Texels {
+                format: vk::Format::R16G16B16A16_SFLOAT,
+                bytes: 8,
+            }
+        }
+    }
+}
+
+fn volume_usage() -> vk::ImageUsageFlags {
+    vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::SAMPLED | vk::ImageUsageFlags::TRANSFER_SRC
+}
+
+/// Each voxel's light (step 2's output), full resolution.
+fn radiance_volume(
+    ctx: &Arc<Context>,
+    n: u32,
+    texels: Texels,
+    info: &mut Vec<VolumeInfo>,
+) -> VkResult<Image> {
+    let format = texels.format;
+    let radiance = Image::new(
+        ctx,
+        "voxel radiance",
+        ImageDesc::d3(format, n, volume_usage()),
+    )?;
+    info.push(VolumeInfo {
+        name: format!("voxel radiance ({format:?})"),
+        bytes: (n as u64).pow(3) * texels.bytes,
+    });
+    Ok(radiance)
+}
+
+/// The way each voxel's light goes (not for --paper).
+fn light_direction_volume(
+    ctx: &Arc<Context>,
+    n: u32,
+    settings: &GiSettings,
+    info: &mut Vec<VolumeInfo>,
+) -> VkResult<Option<Image>> {
+    if settings.paper {
+        return Ok(None);
+    }
+    let desc = ImageDesc::d3(vk::Format::R8G8B8A8_SNORM, n, volume_usage());
+    info.push(VolumeInfo {
+        name: "voxel light direction (RGBA8 signed)".into(),
+        bytes: (n as u64).pow(3) * 4,
+    });
+    Some(Image::new(ctx, "voxel light direction", desc)).transpose()
+}
+
+/// Emission of emitters too small to be area lights (not for --paper; the bindings stay, so a
+/// scene without emitters gets a one-texel stand-in).
+fn small_emission_volume(
+    ctx: &Arc<Context>,
+    n: u32,
+    settings: &GiSettings,
+    emissive: bool,
+    info: &mut Vec<VolumeInfo>,
+) -> VkResult<Option<Image>> {
+    if settings.paper {
+        return Ok(None);
+    }
+    let side = if emissive { n } else { 1 };
+    // Storage only: the inject pass writes it, the mip pass reads it, the readback copies it.
+    let desc = ImageDesc::d3(
+        vk::Format::R32_SFLOAT,
+        side,
+        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+    );
+    if emissive {
+        info.push(VolumeInfo {
+            name: "voxel emission of small emitters (R32F)".into(),
+            bytes: (n as u64).pow(3) * 4,
+        });
+    }
+    Some(Image::new(ctx, "voxel emission of small emitters", desc)).transpose()
+}
+
+/// Step 3's six directional volumes with their mips; also the bytes of one of them.
+fn directional_volumes(
+    ctx: &Arc<Context>,
+    grid: VoxelGrid,
+    texels: Texels,
+    info: &mut Vec<VolumeInfo>,
+) -> VkResult<(Vec<Image>, u64)> {
+    let m = grid.aniso_resolution();
+    let levels = grid.mip_levels();
+    let faces = ["-X", "+X", "-Y", "+Y", "-Z", "+Z"]
+        .iter()
+        .map(|f| {
+            Image::new(
+                ctx,
+                &format!("directional volume {f}"),
+                ImageDesc::d3(texels.format, m, volume_usage()).mips(levels),
+            )
+        })
+        .collect::<VkResult<Vec<_>>>()?;
+    let face_bytes: u64 = (0..levels)
+        .map(|l| ((m >> l).max(1) as u64).pow(3) * texels.bytes)
+        .sum();
+    info.push(VolumeInfo {
+        name: format!("6 directional volumes, {m}^3 with {levels} mips"),
+        bytes: 6 * face_bytes,
+    });
+    Ok((faces, face_bytes))
+}
+
+/// A volume beside the directional ones, texel for texel (not for --paper).
+fn beside_directional(
+    ctx: &Arc<Context>,
+    grid: VoxelGrid,
+    settings: &GiSettings,
+    face_bytes: u64,
+    what: &str,
+    info: &mut Vec<VolumeInfo>,
+) -> VkResult<Option<Image>> {
+    if settings.paper {
+        return Ok(None);
+    }
+    let (m, levels) = (grid.aniso_resolution(), grid.mip_levels());
+    let desc = ImageDesc::d3(vk::Format::R16G16B16A16_SFLOAT, m, volume_usage()).mips(levels);
+    info.push(VolumeInfo {
+        name: format!("directional {what}, {m}^3 with {levels} mips"),
+        bytes: face_bytes,
+    });
+    Image::new(ctx, &format!("directional {what}"), desc).map(Some)
+}
+
+/// Trilinear with mips; transparent black beyond the grid.
+fn volume_sampler(ctx: &Arc<Context>) -> VkResult<Sampler> {
+    Sampler::new(
+        ctx,
+        &vk::SamplerCreateInfo::default()
+            .mag_filter(vk::Filter::LINEAR)
+            .min_filter(vk::Filter::LINEAR)
+            .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_BORDER)
+            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_BORDER)
+            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_BORDER)
+            .border_color(vk::BorderColor::FLOAT_TRANSPARENT_BLACK)
+            .max_lod(vk::LOD_CLAMP_NONE),
+    )
 }
 
 /// The empty-space cells' distances (R32UI; None for --paper, a one-texel stand-in, never read,

@@ -417,33 +417,20 @@ impl GpuScene {
         shadow_resolution: ShadowResolution,
         pcf_radius: u32,
     ) -> VkResult<GpuScene> {
-        let usage_dst = vk::BufferUsageFlags::TRANSFER_DST;
-        let mut staging_data: Vec<u8> = Vec::new();
-        let mut stage = |bytes: &[u8]| -> u64 {
-            // 16-byte alignment satisfies every copy's offset rules.
-            while !staging_data.len().is_multiple_of(16) {
-                staging_data.push(0);
-            }
-            let off = staging_data.len() as u64;
-            staging_data.extend_from_slice(bytes);
-            off
-        };
-
-        let vertex_off = stage(as_bytes(&scene.vertices));
-        let index_off = stage(as_bytes(&scene.indices));
-        let vertices = Buffer::new(
+        let mut staging = Staging::default();
+        let (vertices, vertex_off) = staged_buffer(
             ctx,
             "scene vertices",
-            std::mem::size_of_val(scene.vertices.as_slice()) as u64,
-            vk::BufferUsageFlags::VERTEX_BUFFER | usage_dst,
-            MemoryLocation::GpuOnly,
+            as_bytes(&scene.vertices),
+            vk::BufferUsageFlags::VERTEX_BUFFER,
+            &mut staging,
         )?;
-        let indices = Buffer::new(
+        let (indices, index_off) = staged_buffer(
             ctx,
             "scene indices",
-            std::mem::size_of_val(scene.indices.as_slice()) as u64,
-            vk::BufferUsageFlags::INDEX_BUFFER | usage_dst,
-            MemoryLocation::GpuOnly,
+            as_bytes(&scene.indices),
+            vk::BufferUsageFlags::INDEX_BUFFER,
+            &mut staging,
         )?;
 
         // Materials, lights and shadow views are small: host-visible buffers, written once.
@@ -463,67 +450,10 @@ impl GpuScene {
             regions,
             texture_samplers,
             samplers,
-        } = scene_textures(ctx, scene, &mut stage)?;
+        } = scene_textures(ctx, scene, &mut |bytes| staging.push(bytes))?;
 
-        let mut staging = Buffer::new(
-            ctx,
-            "scene staging",
-            staging_data.len() as u64,
-            vk::BufferUsageFlags::TRANSFER_SRC,
-            MemoryLocation::CpuToGpu,
-        )?;
-        staging.write(0, &staging_data);
-
-        ctx.one_shot(|cmd| {
-            let mut g = Graph::new(ctx, cmd, states, None);
-            let mut pass = g
-                .pass("upload")
-                .buffer(&staging, Access::TransferRead)
-                .buffer(&vertices, Access::TransferWrite)
-                .buffer(&indices, Access::TransferWrite);
-            for t in &textures {
-                pass = pass.image(t, Access::TransferWrite);
-            }
-            pass.record(|cmd| unsafe {
-                let d = &ctx.device;
-                if !scene.vertices.is_empty() {
-                    d.cmd_copy_buffer(
-                        cmd,
-                        staging.raw,
-                        vertices.raw,
-                        &[vk::BufferCopy {
-                            src_offset: vertex_off,
-                            dst_offset: 0,
-                            size: vertices
-                                .size
-                                .min(std::mem::size_of_val(scene.vertices.as_slice()) as u64),
-                        }],
-                    );
-                }
-                if !scene.indices.is_empty() {
-                    d.cmd_copy_buffer(
-                        cmd,
-                        staging.raw,
-                        indices.raw,
-                        &[vk::BufferCopy {
-                            src_offset: index_off,
-                            dst_offset: 0,
-                            size: std::mem::size_of_val(scene.indices.as_slice()) as u64,
-                        }],
-                    );
-                }
-                for (t, r) in textures.iter().zip(&regions) {
-                    d.cmd_copy_buffer_to_image(
-                        cmd,
-                        staging.raw,
-                        t.raw,
-                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
-                        r,
-                    );
-                }
-            });
-        })?;
-        states.forget(staging.raw);
+        let copies = [(&vertices, vertex_off), (&indices, index_off)];
+        staging.upload(ctx, states, &copies, &textures, &regions)?;
 
         Ok(GpuScene {
             vertices,
@@ -542,4 +472,107 @@ impl GpuScene {
             light_views: table.views,
         })
     }
+}
+
+/// The bytes of everything uploaded at load, gathered into one staging buffer.
+#[derive(Default)]
+struct Staging {
+    data: Vec<u8>,
+}
+
+impl Staging {
+    /// Appends `bytes`; returns their offset.
+    fn push(&mut self, bytes: &[u8]) -> u64 {
+        // 16-byte alignment satisfies every copy's offset rules.
+        while !self.data.len().is_multiple_of(16) {
+            self.data.push(0);
+        }
+        let off = self.data.len() as u64;
+        self.data.extend_from_slice(bytes);
+        off
+    }
+
+    /// Copies the staged bytes into the buffers (from their offsets) and the textures (by
+    /// their regions) in one command buffer, and waits for it.
+    fn upload(
+        self,
+        ctx: &Arc<Context>,
+        states: &mut ResourceStates,
+        buffers: &[(&Buffer, Staged)],
+        textures: &[Image],
+        regions: &[Vec<vk::BufferImageCopy>],
+    ) -> VkResult<()> {
+        let mut staging = Buffer::new(
+            ctx,
+            "scene staging",
+            self.data.len() as u64,
+            vk::BufferUsageFlags::TRANSFER_SRC,
+            MemoryLocation::CpuToGpu,
+        )?;
+        staging.write(0, &self.data);
+        ctx.one_shot(|cmd| {
+            let mut g = Graph::new(ctx, cmd, states, None);
+            let mut pass = g.pass("upload").buffer(&staging, Access::TransferRead);
+            for (b, _) in buffers {
+                pass = pass.buffer(b, Access::TransferWrite);
+            }
+            for t in textures {
+                pass = pass.image(t, Access::TransferWrite);
+            }
+            pass.record(|cmd| unsafe {
+                let d = &ctx.device;
+                for (b, staged) in buffers {
+                    // An empty scene's buffers are placeholders: nothing to copy.
+                    if staged.len > 0 {
+                        let region = vk::BufferCopy {
+                            src_offset: staged.offset,
+                            dst_offset: 0,
+                            size: staged.len,
+                        };
+                        d.cmd_copy_buffer(cmd, staging.raw, b.raw, &[region]);
+                    }
+                }
+                for (t, r) in textures.iter().zip(regions) {
+                    d.cmd_copy_buffer_to_image(
+                        cmd,
+                        staging.raw,
+                        t.raw,
+                        vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+                        r,
+                    );
+                }
+            });
+        })?;
+        states.forget(staging.raw);
+        Ok(())
+    }
+}
+
+/// Where a buffer's bytes lie in the staging buffer.
+#[derive(Clone, Copy)]
+struct Staged {
+    offset: u64,
+    len: u64,
+}
+
+/// A device-local buffer for `bytes` (with `usage`), its bytes staged.
+fn staged_buffer(
+    ctx: &Arc<Context>,
+    name: &str,
+    bytes: &[u8],
+    usage: vk::BufferUsageFlags,
+    staging: &mut Staging,
+) -> VkResult<(Buffer, Staged)> {
+    let buffer = Buffer::new(
+        ctx,
+        name,
+        bytes.len() as u64,
+        usage | vk::BufferUsageFlags::TRANSFER_DST,
+        MemoryLocation::GpuOnly,
+    )?;
+    let staged = Staged {
+        offset: staging.push(bytes),
+        len: bytes.len() as u64,
+    };
+    Ok((buffer, staged))
 }
