@@ -37,7 +37,8 @@ void main() {
     vec3 p[3];
     for (int i = 0; i < 3; i++) p[i] = world_to_grid(v_world[i]) * n;
     vec3 fn = abs(cross(p[1] - p[0], p[2] - p[0]));
-    // Dominant axis; ties go to Z as in the paper.
+    // Dominant axis; an X = Y > Z tie goes to Y (the original: Z; docs/porting.md), the other
+    // ties to Z as in the original.
     int axis = (fn.x > fn.y && fn.x > fn.z) ? 0 : (fn.y > fn.z ? 1 : 2);
 
     vec3 q[3];

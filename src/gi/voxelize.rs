@@ -1,5 +1,6 @@
 //! Step 1: voxelization. Static geometry is voxelized once (again when a static node moves);
-//! dynamic geometry is cleared and voxelized every frame while static voxels stay.
+//! dynamic geometry is cleared and voxelized again in a frame where a node moved (or the static
+//! voxels were made again) while static voxels stay.
 
 use super::volumes::{Volumes, VoxelData};
 use crate::vk::pipeline::area;
