@@ -85,6 +85,14 @@ void main() {
         int i0 = order[0], i1 = order[1], i2 = order[2];
         g_normal = b0 * v_normal[i0] + b1 * v_normal[i1] + b2 * v_normal[i2];
         g_uv = b0 * v_uv[i0] + b1 * v_uv[i1] + b2 * v_uv[i2];
+        // A sliver's grown corners lie far out along its nearly parallel edges, where the
+        // extrapolated attributes grow without bound (texture coordinates of 1e30 and more,
+        // which cost lavapipe minutes a draw): past 16 triangle-heights out, the corner keeps
+        // its own vertex's attributes, as in the original.
+        if (!(max(max(abs(b0), abs(b1)), abs(b2)) <= 16.0)) {
+            g_normal = v_normal[order[i]];
+            g_uv = v_uv[order[i]];
+        }
         g_aabb = vec4(lo, hi);
         g_plane = vec4(plane, 0.0);
 #ifndef PAPER

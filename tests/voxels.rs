@@ -612,3 +612,74 @@ fn the_readback_holds_the_directional_volumes_and_small_emitters() {
     assert!(d.small_emission.is_none());
     assert!(d.directional.is_some());
 }
+
+#[test]
+fn a_sliver_samples_its_own_texels_not_extrapolated_ones() {
+    // A texture red for v in [0, 0.5), green for [0.5, 1), repeated; a sliver triangle (a
+    // ten-thousandth of a voxel high, six voxels long, turned off the axes) whose texture
+    // coordinates lie in the red half. Conservative rasterization grows it by half a voxel,
+    // thousands of its heights: attributes extrapolated that far read texels anywhere in the
+    // texture (and took lavapipe minutes per draw for a building of such slivers).
+    let mut s = empty_scene();
+    s.textures.push(Texture {
+        name: "red over green".into(),
+        width: 1,
+        height: 2,
+        rgba8: vec![255, 0, 0, 255, 0, 255, 0, 255],
+        srgb: false,
+        wrap_s: Wrap::Repeat,
+        wrap_t: Wrap::Repeat,
+        mag_nearest: true,
+        min_nearest: true,
+    });
+    s.materials.push(Material {
+        base_color_tex: Some(TexRef {
+            texture: 0,
+            tex_coord: 0,
+        }),
+        metallic: 0.0,
+        specular_factor: 0.0,
+        ..Material::default()
+    });
+    let grey = lambert(&mut s, Vec3::splat(0.5));
+    anchor(&mut s, grey);
+    let n = 32;
+    let grid = VoxelGrid::fit(
+        &voxgi::scene::Aabb {
+            min: Vec3::ZERO,
+            max: Vec3::ONE,
+        },
+        n,
+    );
+    let vs = grid.voxel_size();
+    let turn = Quat::from_rotation_y(0.3) * Quat::from_rotation_x(0.2);
+    let centre = Vec3::splat(0.5);
+    let corners = [
+        Vec3::new(-3.0 * vs, 0.0, 0.0),
+        Vec3::new(3.0 * vs, 0.0, 0.0),
+        Vec3::new(0.2 * vs, 1e-4 * vs, 0.0),
+    ]
+    .map(|c| centre + turn * c);
+    triangle(&mut s, corners, [[0.5, 0.1], [0.5, 0.1], [0.5, 0.4]], 0);
+    let d = render_voxels(&s, voxel_settings(n, false, Mode::VoxelsAlbedo));
+    let near = |i: usize| {
+        let r = d.resolution as usize;
+        let c = Vec3::new((i % r) as f32, ((i / r) % r) as f32, (i / (r * r)) as f32);
+        (grid.origin + (c + 0.5) * vs - centre).length() < 5.0 * vs
+    };
+    let sliver: Vec<usize> = (0..d.filled.len())
+        .filter(|&i| d.filled[i] && near(i))
+        .collect();
+    assert!(
+        sliver.len() >= 6,
+        "the sliver filled {} voxels",
+        sliver.len()
+    );
+    for i in sliver {
+        let a = d.albedo[i];
+        assert!(
+            a.x > 0.99 && a.y < 0.01,
+            "voxel {i} of the sliver holds albedo {a}: texels from outside its own"
+        );
+    }
+}
