@@ -229,7 +229,13 @@ void main() {
 #endif
 #endif
     vec3 irradiance = g.irradiance;
+#ifdef PAPER
+    // The original's 1 - sum(w occlusion) + aoAlpha (0), its weights summing to pi: black once
+    // the mean occlusion reaches 1/pi.
+    float ao = clamp(1.0 - g.occlusion, 0.0, 1.0);
+#else
     float ao = clamp(1.0 - g.occlusion / PI, 0.0, 1.0);
+#endif
 
     vec3 specular = vec3(0.0);
     if (frame.trace.z > 0.0 && max(spec_reflectance.r, max(spec_reflectance.g, spec_reflectance.b)) > 1e-4) {
@@ -260,7 +266,11 @@ void main() {
     }
 
 #ifdef PAPER
-    vec3 indirect = 2.0 * (base * irradiance + specular);
+    // The original's G-buffer and voxels hold its textures undecoded (gamma-space albedo): it
+    // multiplies the cones by that albedo, doubles the sum (bounceStrength 2) and raises it to
+    // 2.2.
+    vec3 indirect = pow(max(2.0 * (pow(base, vec3(1.0 / 2.2)) * irradiance + specular), vec3(0.0)),
+                        vec3(2.2));
     vec3 full = (direct.rgb - emission.rgb + indirect) * ao + emission.rgb;
 #else
     vec3 indirect = diffuse_weight * irradiance + specular;

@@ -181,7 +181,8 @@ Cone trace_cone(vec3 origin, vec3 dir, float tan_half, float t0, float max_dist,
     for (int i = 0; i < 1024 && t < max_dist && cone.opacity < 0.99; i++) {
         vec3 uvw = world_to_grid(origin + dir * t);
 #ifdef PAPER
-        if (any(lessThan(uvw, vec3(0.0))) || any(greaterThan(uvw, vec3(1.0)))) break;
+        // No test against the grid: the original marches to its maximum distance, reading the
+        // edge texels beyond the grid (the volumes' sampler clamps to the edge under --paper).
         float diameter = 2.0 * tan_half * t;
 #else
         float diameter = max(2.0 * tan_half * t, min_diameter * vs);

@@ -5,8 +5,9 @@
 // passes then run again. Default: the pixel pass's cone set and albedo / pi; a two-sided voxel
 // gathers both sides. What a voxel reflects is kept aside for bounce_tail.comp, which adds it
 // (on the last bounce with the bounces not traced), and each voxel's albedo times the share of
-// its hemisphere the cones found closed is summed for it. PAPER: 4 cones of aperture 1, weights
-// pi/3 and 2pi/9, clamped to 1, added to the radiance here.
+// its hemisphere the cones found closed is summed for it. PAPER: the original's 4 cones of
+// aperture 1, 40.9 degrees from the normal, weights pi/3 and 2pi/9, clamped to 1, added to the
+// radiance here.
 #include "common.glsl"
 #include "voxel_common.glsl"
 #define VOXEL_SET 1
@@ -31,6 +32,28 @@ layout(set = 1, binding = 12, std430) buffer Reflectance { uint reflectance[8]; 
 shared vec4 partial[64];
 #endif
 
+#ifdef PAPER
+// The original's propagation cone: aperture 1 (diameter = distance, a half angle of 26.6
+// degrees), the directional volumes only, steps of a diameter but at least a texel (two
+// voxels), composited "over". Nothing if its first sample lies outside the grid; past the grid
+// it reads the edge texels (clamp to edge), as the original does with its boundary check off.
+vec3 paper_propagation_cone(vec3 origin, vec3 dir, float max_dist) {
+    float texel = 2.0 * voxel_size();
+    float t = texel;
+    vec4 cone = vec4(0.0);
+    vec3 uvw = world_to_grid(origin + dir * t);
+    if (any(lessThan(uvw, vec3(0.0))) || any(greaterThan(uvw, vec3(1.0)))) return vec3(0.0);
+    for (int i = 0; i < 1024 && cone.a <= 1.0 && t <= max_dist; i++) {
+        float diameter = t;
+        float level = max(log2(diameter / texel) - 1.0, 0.0);
+        vec4 s = sample_directional(world_to_grid(origin + dir * t), dir, level);
+        cone += (1.0 - cone.a) * s;
+        t += max(diameter, texel);
+    }
+    return cone.rgb / frame.tuning.y;  // the volumes' radiance scale
+}
+#endif
+
 // The light falling on a surface at p facing n (rgb), and the share of its hemisphere, cosine
 // weighted, where the cones met surfaces (a).
 vec4 gather(vec3 p, vec3 n) {
@@ -40,13 +63,16 @@ vec4 gather(vec3 p, vec3 n) {
     vec3 e = vec3(0.0);
     float closed = 0.0;
 #ifdef PAPER
-    const vec3 dirs[4] = vec3[4](vec3(0.0, 0.0, 1.0), vec3(0.0, 0.866025, 0.5),
-                                 vec3(0.754996, -0.4330128, 0.5), vec3(-0.754996, -0.4330128, 0.5));
+    // The original's four directions, its ring vectors' tangent parts added to the normal (so
+    // tilted 40.9 degrees, not the 60 their y of 0.5 suggests), in tangent_frame's axes: the
+    // original's "right" is the frame's second axis and its "up" the first.
+    const vec3 dirs[4] = vec3[4](vec3(0.0, 0.0, 1.0), vec3(0.866025, 0.0, 1.0),
+                                 vec3(-0.4330128, 0.754996, 1.0), vec3(-0.4330128, -0.754996, 1.0));
     const float weights[4] = float[4](PI / 3.0, 2.0 * PI / 9.0, 2.0 * PI / 9.0, 2.0 * PI / 9.0);
     vec3 origin = p + n * 2.0 * vs;  // one directional-volume texel
     for (int i = 0; i < 4; i++) {
         vec3 d = normalize(frame_n * dirs[i]);
-        e += weights[i] * trace_cone(origin, d, 1.0, 2.0 * vs, max_dist).radiance;
+        e += weights[i] * paper_propagation_cone(origin, d, max_dist);
     }
 #else
     // From a voxel centre, which can lie up to sqrt(3)/2 voxel behind its surface: one voxel

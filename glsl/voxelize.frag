@@ -84,7 +84,14 @@ void main() {
 
     Material m = material;
     vec4 base = m.base_color * texture(t_base_color, g_uv);
+#ifdef PAPER
+    // The original keeps a fragment whose opacity is above 0 and premultiplies its albedo by it
+    // (glTF's alpha is an opacity where it has a cutoff; elsewhere the surface is opaque).
+    float opacity = m.params.w >= 0.0 ? base.a : 1.0;
+    if (opacity <= 0.0) discard;
+#else
     if (m.params.w >= 0.0 && base.a < m.params.w) discard;
+#endif
     vec3 emission = m.emissive.rgb * texture(t_emissive, g_uv).rgb;
     // An emitter injected as a light lights the voxels through it, not as emission.
     if ((draw.flags & 4u) != 0u) emission = vec3(0.0);
@@ -104,7 +111,9 @@ void main() {
     if (!static_pass && (frame.grid_info.w & FLAG_DYNAMIC) != 0u && static_flag.w[voxel] != 0u) {
         return;  // the paper hides dynamic geometry inside static voxels
     }
-    imageAtomicRGBA8Avg(albedo_grid, voxel, vec4(base.rgb, 1.0));
+    // The original's textures are not decoded from sRGB: its voxels hold gamma-space albedo
+    // (cone_trace.comp raises the indirect light to 2.2 in the end).
+    imageAtomicRGBA8Avg(albedo_grid, voxel, vec4(pow(base.rgb, vec3(1.0 / 2.2)) * opacity, 1.0));
     imageAtomicRGBA8Avg(normal_grid, voxel, vec4(normal * 0.5 + 0.5, 1.0));
     if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u) {
         imageAtomicRGBA8Avg(emission_grid, voxel, vec4(emission, 1.0));

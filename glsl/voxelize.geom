@@ -37,9 +37,12 @@ void main() {
     vec3 p[3];
     for (int i = 0; i < 3; i++) p[i] = world_to_grid(v_world[i]) * n;
     vec3 fn = abs(cross(p[1] - p[0], p[2] - p[0]));
-    // Dominant axis; an X = Y > Z tie goes to Y (the original: Z; docs/porting.md), the other
-    // ties to Z as in the original.
+    // Dominant axis. The original sends every tie to Z; the default sends an X = Y > Z tie to Y.
+#ifdef PAPER
+    int axis = (fn.x > fn.y && fn.x > fn.z) ? 0 : ((fn.y > fn.x && fn.y > fn.z) ? 1 : 2);
+#else
     int axis = (fn.x > fn.y && fn.x > fn.z) ? 0 : (fn.y > fn.z ? 1 : 2);
+#endif
 
     vec3 q[3];
     int order[3] = int[3](0, 1, 2);
@@ -83,16 +86,22 @@ void main() {
         float b2 = (d1.x * dv.y - d1.y * dv.x) / den;
         float b0 = 1.0 - b1 - b2;
         int i0 = order[0], i1 = order[1], i2 = order[2];
+#ifdef PAPER
+        // The original keeps each vertex's own attributes on its grown corner.
+        g_normal = v_normal[order[i]];
+        g_uv = v_uv[order[i]];
+#else
         g_normal = b0 * v_normal[i0] + b1 * v_normal[i1] + b2 * v_normal[i2];
         g_uv = b0 * v_uv[i0] + b1 * v_uv[i1] + b2 * v_uv[i2];
         // A sliver's grown corners lie far out along its nearly parallel edges, where the
         // extrapolated attributes grow without bound (texture coordinates of 1e30 and more,
         // which cost lavapipe minutes a draw): past 16 triangle-heights out, the corner keeps
-        // its own vertex's attributes, as in the original.
+        // its own vertex's attributes, as the original's always do.
         if (!(max(max(abs(b0), abs(b1)), abs(b2)) <= 16.0)) {
             g_normal = v_normal[order[i]];
             g_uv = v_uv[order[i]];
         }
+#endif
         g_aabb = vec4(lo, hi);
         g_plane = vec4(plane, 0.0);
 #ifndef PAPER

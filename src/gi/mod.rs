@@ -49,7 +49,8 @@ pub struct GiSettings {
     pub max_distance: f32,
     /// How far cones start off the surface, in voxels.
     pub start_offset: f32,
-    /// The paper's AO falloff (occlusion / (1 + falloff x diameter in metres)).
+    /// AO falloff per voxel of diameter (occlusion / (1 + falloff x diameter in voxels)).
+    /// `paper` uses the original's instead, 0.5 x [`PAPER_AO_FALLOFF`] / the grid's edge per metre.
     pub ao_falloff: f32,
     /// Voxel visibility by tracing the voxels instead of the shadow maps.
     pub voxel_shadows: bool,
@@ -134,6 +135,10 @@ impl Default for GiSettings {
         }
     }
 }
+
+/// The original's aoFalloff (gi_deferred_renderer.cpp): its AO divides each sample's occlusion
+/// by 1 + 0.5 x 800 x diameter / the grid's edge, 400 / N per voxel of diameter.
+pub const PAPER_AO_FALLOFF: f32 = 800.0;
 
 impl GiSettings {
     /// The original's constants (PAPER_NOTES.md): 6 cones of 60 degrees, step 0.5 x diameter,

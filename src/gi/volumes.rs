@@ -209,7 +209,7 @@ impl Volumes {
         let light_pos =
             beside_directional(ctx, grid, settings, face_bytes, "light position", &mut info)?;
         let empty_space = empty_space_volume(ctx, grid, settings, &mut info)?;
-        let sampler = volume_sampler(ctx)?;
+        let sampler = volume_sampler(ctx, settings.paper)?;
         let [s, d] = data.tables();
         let words = [
             AddressTable::new(ctx, "static voxel word addresses", &s)?,
@@ -375,17 +375,23 @@ fn beside_directional(
     Image::new(ctx, &format!("directional {what}"), desc).map(Some)
 }
 
-/// Trilinear with mips; transparent black beyond the grid.
-fn volume_sampler(ctx: &Arc<Context>) -> VkResult<Sampler> {
+/// Trilinear with mips; transparent black beyond the grid (--paper: the edge texels, as the
+/// original's clamp to edge).
+fn volume_sampler(ctx: &Arc<Context>, paper: bool) -> VkResult<Sampler> {
+    let beyond = if paper {
+        vk::SamplerAddressMode::CLAMP_TO_EDGE
+    } else {
+        vk::SamplerAddressMode::CLAMP_TO_BORDER
+    };
     Sampler::new(
         ctx,
         &vk::SamplerCreateInfo::default()
             .mag_filter(vk::Filter::LINEAR)
             .min_filter(vk::Filter::LINEAR)
             .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
-            .address_mode_u(vk::SamplerAddressMode::CLAMP_TO_BORDER)
-            .address_mode_v(vk::SamplerAddressMode::CLAMP_TO_BORDER)
-            .address_mode_w(vk::SamplerAddressMode::CLAMP_TO_BORDER)
+            .address_mode_u(beyond)
+            .address_mode_v(beyond)
+            .address_mode_w(beyond)
             .border_color(vk::BorderColor::FLOAT_TRANSPARENT_BLACK)
             .max_lod(vk::LOD_CLAMP_NONE),
     )

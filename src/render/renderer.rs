@@ -451,7 +451,11 @@ impl Renderer {
             );
             u.trace = Vec4::new(
                 s.start_offset,
-                s.ao_falloff / grid.voxel_size(),
+                if s.paper {
+                    crate::gi::PAPER_AO_FALLOFF * 0.5 / grid.size
+                } else {
+                    s.ao_falloff / grid.voxel_size()
+                },
                 if self.specular_needed { 1.0 } else { 0.0 },
                 self.settings.mip.unwrap_or(0) as f32,
             );
