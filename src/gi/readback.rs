@@ -20,9 +20,10 @@ pub struct VoxelDump {
     pub emission: Vec<Vec3>,
     /// Outgoing radiance and opacity, when the voxels are lit.
     pub radiance: Option<Vec<Vec4>>,
-    /// When the voxels are lit (default mode): every texel of every level of the directional
-    /// volumes and of the volumes beside them (light direction and position), in the order of
-    /// `Volumes::directional`, level by level; as stored (radiance times the radiance scale).
+    /// When the voxels are lit: every texel of every level of the directional volumes and of
+    /// the volumes beside them (light direction and position; none for --paper, whose texels
+    /// are RGBA8), in the order of `Volumes::directional`, level by level; as stored (radiance
+    /// times the radiance scale).
     pub directional: Option<Vec<Vec4>>,
     /// When the voxels are lit and the scene emits (default mode): the emission of emitters
     /// smaller than their voxel, as stored.
@@ -141,10 +142,10 @@ struct LitLevel<'a> {
 }
 
 impl Gi {
-    /// The lit volumes' levels, none before the voxels are lit: the radiance, then (not for
-    /// --paper, whose directional volumes are RGBA8) every level of the directional volumes
-    /// and of those beside them, and the small emitters' volume when the scene emits (without
-    /// emitters it is a one-texel stand-in).
+    /// The lit volumes' levels, none before the voxels are lit: the radiance, then every level
+    /// of the directional volumes and of those beside them (--paper: RGBA8, and none beside
+    /// them), and the small emitters' volume when the scene emits (without emitters it is a
+    /// one-texel stand-in).
     fn lit_levels(&self) -> Vec<LitLevel<'_>> {
         let mut levels = Vec::new();
         if self.lighting.is_none() {
@@ -159,15 +160,12 @@ impl Gi {
             side: n,
             kind: Lit::Radiance,
         });
-        if self.settings.paper {
-            return levels;
-        }
         for (i, img) in self.volumes.directional().enumerate() {
             let side = img.desc.extent.width;
             for level in 0..img.desc.mip_levels {
                 levels.push(LitLevel {
                     img,
-                    texel: 8,
+                    texel,
                     level,
                     side: (side >> level).max(1),
                     kind: Lit::Directional(i),
@@ -326,7 +324,17 @@ impl Gi {
     fn decode_lit(&self, parts: &Parts, directional_names: &[String], dump: &mut VoxelDump) {
         let directional: Vec<Vec4> = directional_names
             .iter()
-            .flat_map(|name| halves(parts[name.as_str()]))
+            .flat_map(|name| {
+                let bytes = parts[name.as_str()];
+                if self.settings.paper {
+                    words(bytes)
+                        .into_iter()
+                        .map(|w| unpack_rgba8(w) / 255.0)
+                        .collect()
+                } else {
+                    halves(bytes)
+                }
+            })
             .collect();
         if !directional.is_empty() {
             dump.directional = Some(directional);
