@@ -178,7 +178,12 @@ Cone trace_cone(vec3 origin, vec3 dir, float tan_half, float t0, float max_dist,
     // something, and their steps need not pay for the lookup.
     bool was_empty = (frame.grid_info.w & FLAG_EMPTY_SPACE) != 0u;
 #endif
-    for (int i = 0; i < 1024 && t < max_dist && cone.opacity < 0.99; i++) {
+#ifdef PAPER
+    const float opaque = 1.0;   // the original's
+#else
+    const float opaque = 0.99;
+#endif
+    for (int i = 0; i < 1024 && t < max_dist && cone.opacity < opaque; i++) {
         vec3 uvw = world_to_grid(origin + dir * t);
 #ifdef PAPER
         // No test against the grid: the original marches to its maximum distance, reading the
@@ -254,8 +259,9 @@ Cone trace_specular_cone(vec3 origin, vec3 dir, float tan_half, float t0) {
 // An orthonormal frame around n (z = n).
 mat3 tangent_frame(vec3 n) {
 #ifdef PAPER
-    // The original's guide vector, (0,1,0), or (0,0,1) when n is along it.
-    vec3 guide = abs(dot(n, vec3(0.0, 1.0, 0.0))) > 0.999 ? vec3(0.0, 0.0, 1.0) : vec3(0.0, 1.0, 0.0);
+    // The original's guide vector, (0,1,0), or (0,0,1) when n is exactly along it (a normal a
+    // hair off the vertical takes its tangents from the hair, as in the original).
+    vec3 guide = abs(dot(n, vec3(0.0, 1.0, 0.0))) == 1.0 ? vec3(0.0, 0.0, 1.0) : vec3(0.0, 1.0, 0.0);
     vec3 t = normalize(cross(guide, n));
 #else
     // Branchless basis (Duff et al. 2017): no division by a vanishing cross product. Its seam
