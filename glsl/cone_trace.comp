@@ -259,8 +259,14 @@ void main() {
             vec3 e = light_irradiance(lights[i], p, l, dist);
             float n_dot_l = dot(n, l);
             if (n_dot_l <= 0.0 || dot(geo, l) <= 0.0) continue;
-            Cone c = trace_cone(origin, l, 0.03, t0, min(dist, max_dist));
-            d += brdf(surf, n, v, l) * e * n_dot_l * (1.0 - c.opacity);
+#ifdef PAPER
+            // Up to the light, or across the grid for a directional light (its dist is
+            // unbounded), as the original's calls do.
+            float shown = paper_shadow_cone(p, l, min(dist, frame.grid.w));
+#else
+            float shown = 1.0 - trace_cone(origin, l, 0.03, t0, min(dist, max_dist)).opacity;
+#endif
+            d += brdf(surf, n, v, l) * e * n_dot_l * shown;
         }
         direct.rgb = d;
     }

@@ -246,6 +246,27 @@ Cone trace_cone(vec3 origin, vec3 dir, float tan_half, float t0, float max_dist,
     return cone;
 }
 
+#ifdef PAPER
+// The original's TraceShadowCone: from the surface point `p` two voxels towards the light
+// (along `l`, not the normal), its first sample two voxels further; aperture 0.03; each
+// sample's opacity scaled by k = 2^(7 x coneShadowTolerance) = 1.62 (tolerance 0.1); to
+// `max_dist`; the light's visibility, 1 - the accumulated occlusion, at least 0.
+float paper_shadow_cone(vec3 p, vec3 l, float max_dist) {
+    float vs2 = 2.0 * voxel_size();
+    vec3 start = p + l * vs2;
+    const float k = exp2(7.0 * 0.1);
+    float occluded = 0.0;
+    float t = vs2;
+    for (int i = 0; i < 1024 && occluded < 1.0 && t <= max_dist; i++) {
+        float diameter = 2.0 * 0.03 * t;
+        vec3 uvw = world_to_grid(start + l * t);
+        occluded += (1.0 - occluded) * sample_cone(uvw, l, diameter, uvw).a * k;
+        t += diameter * frame.cone.y;
+    }
+    return max(0.0, 1.0 - occluded);
+}
+#endif
+
 Cone trace_cone(vec3 origin, vec3 dir, float tan_half, float t0, float max_dist) {
     return trace_cone(origin, dir, tan_half, t0, max_dist, 1.0);
 }

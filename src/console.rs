@@ -7,7 +7,7 @@
 //! errors only. `RUST_LOG` overrides the flags (env_logger's syntax, e.g. `RUST_LOG=voxgi=debug`).
 //! Bars are drawn only when stderr is a terminal and info is shown.
 
-use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressStyle};
+use indicatif::{MultiProgress, ProgressBar, ProgressDrawTarget, ProgressFinish, ProgressStyle};
 use std::io::{IsTerminal, Write};
 use std::sync::OnceLock;
 use std::time::Duration;
@@ -80,12 +80,14 @@ pub fn bars_shown() -> bool {
 }
 
 /// A progress bar of `len` steps labelled `what`, hidden where bars are not shown. It draws
-/// the steps done, the elapsed time and an estimate of the time left; `finish` or drop it.
+/// the steps done, the elapsed time and an estimate of the time left, until dropped.
 pub fn bar(len: u64, what: &str) -> ProgressBar {
     if !bars_shown() {
         return ProgressBar::hidden();
     }
-    let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::hidden());
+    // Cleared when dropped: what stays on the terminal is the log lines.
+    let bar = ProgressBar::with_draw_target(Some(len), ProgressDrawTarget::hidden())
+        .with_finish(ProgressFinish::AndClear);
     bar.set_style(
         ProgressStyle::with_template("{msg} [{bar:32}] {pos}/{len} {elapsed}, {eta} left")
             .expect("a valid progress template")
