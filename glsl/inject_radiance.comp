@@ -29,24 +29,41 @@ layout(set = 1, binding = 6, rgba8_snorm) uniform writeonly image3D emit_dir;
 layout(set = 1, binding = 10, r32f) uniform writeonly image3D small_emission;
 #endif
 
+#ifdef PAPER
+// The original's ceil(texture(voxelAlbedo, uvw).a): a hit when any of the eight voxels a
+// trilinear lookup at `uvw` blends (clamped to the edge) is filled.
+bool paper_hit(vec3 uvw) {
+    int n = int(grid_n());
+    ivec3 base = ivec3(floor(uvw * float(n) - 0.5));
+    for (int k = 0; k < 8; k++) {
+        ivec3 c = clamp(base + ivec3(k & 1, (k >> 1) & 1, k >> 2), ivec3(0), ivec3(n - 1));
+        if (voxel_filled(c)) return true;
+    }
+    return false;
+}
+#endif
+
 // Visibility of the light by marching the voxels (--voxel-shadows), from two voxels out, one
-// voxel per step, up to the light or out of the grid. Default: any voxel on the way blocks.
-// PAPER: the original's accumulation v += (1 - v) * k / dst with k = 0.25 and dst in grid
-// units, which saturates near hits; returns 1 - v.
+// voxel per step, up to the light or out of the grid. Default: the nearest voxel, and any
+// filled one on the way blocks. PAPER: the original's accumulation v += (1 - v) * k / dst with
+// k = 0.25 and dst in grid units, which saturates near hits, of the trilinear lookup's voxels;
+// returns 1 - v.
 float voxel_visibility(vec3 p, vec3 l, float dist) {
     float vs = voxel_size();
     float v = 0.0;
     for (float t = 2.0 * vs; t < dist; t += vs) {
-        ivec3 c = ivec3(floor(world_to_grid(p + l * t) * float(grid_n())));
-        if (!in_grid(c)) break;
-        if (voxel_filled(c)) {
+        vec3 uvw = world_to_grid(p + l * t);
 #ifdef PAPER
+        if (any(lessThan(uvw, vec3(0.0))) || any(greaterThan(uvw, vec3(1.0)))) break;
+        if (paper_hit(uvw)) {
             v += (1.0 - v) * 0.25 / (t / frame.grid.w);
-            if (v >= 1.0) return 0.0;
-#else
-            return 0.0;
-#endif
+            if (v > 1.0) return 0.0;
         }
+#else
+        ivec3 c = ivec3(floor(uvw * float(grid_n())));
+        if (!in_grid(c)) break;
+        if (voxel_filled(c)) return 0.0;
+#endif
     }
     return clamp(1.0 - v, 0.0, 1.0);
 }
