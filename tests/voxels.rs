@@ -685,3 +685,45 @@ fn a_sliver_samples_its_own_texels_not_extrapolated_ones() {
         );
     }
 }
+
+/// The original's imageAtomicRGBA8Avg applied to `values` one after another (each fragment's
+/// compare-and-swap meeting the word the one before left): the word's bytes.
+fn rgba8_average_model(values: &[f32]) -> [u8; 4] {
+    let pack = |v: [f32; 4]| v.map(|x| (x as u32 & 0xFF) as u8);
+    let mut word = [0u8; 4];
+    for &x in values {
+        let value = x * 255.0;
+        if word == [0; 4] {
+            word = pack([value, value, value, 1.0]);
+            continue;
+        }
+        let r = word.map(|b| b as f32);
+        let a = r[3] + 1.0;
+        let mean = |c: usize| (r[c] * r[3] + value) / a;
+        word = pack([mean(0), mean(1), mean(2), a]);
+    }
+    word
+}
+
+#[test]
+fn paper_average_is_the_compare_and_swap_model_bit_for_bit() {
+    // Varied texels, so that every round's truncation shows: the stored bytes and count are
+    // those of the original's loop run on the CPU, fragment after fragment, on the gamma-space
+    // values --paper writes.
+    let (s, _) = stacked_triangles(&COUNTS, true, 32);
+    let d = render_voxels(&s, voxel_settings(32, true, Mode::VoxelsAlbedo));
+    for (k, &count) in COUNTS.iter().enumerate() {
+        let c = [2 + (k as u32 % 28), 3 + 2 * (k as u32 / 28), 16];
+        let values: Vec<f32> = (0..count)
+            .map(|i| {
+                let texel = (i * 37 + k as u32 * 11) % 256;
+                (texel as f32 / 255.0).powf(1.0 / 2.2)
+            })
+            .collect();
+        let want = rgba8_average_model(&values);
+        let i = d.index(c[0], c[1], c[2]);
+        let got = (d.albedo[i] * 255.0).round();
+        let got = [got.x as u8, got.y as u8, got.z as u8, d.count[i] as u8];
+        assert_eq!(got, want, "{count} fragments in voxel {c:?}");
+    }
+}
