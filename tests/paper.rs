@@ -7,6 +7,7 @@ use glam::{Vec3, Vec4};
 use gpu::*;
 use voxgi::gi::{GiSettings, VoxelDump, VoxelGrid, PAPER_AO_FALLOFF};
 use voxgi::render::{Mode, RenderSettings, Renderer};
+use voxgi::scene::Scene;
 
 /// A level of `side`^3 texels (x fastest) sampled trilinearly at `uvw`, clamped to the edge
 /// (else transparent black beyond it).
@@ -166,6 +167,31 @@ fn paper_ao(v: &Volumes, p: Vec3, n: Vec3, falloff: f32, over_pi: bool) -> f32 {
     (1.0 - sum).clamp(0.0, 1.0)
 }
 
+/// `--paper`'s AO at the middle pixel of a 33x33 frame of `s` (one sample, `n`^3 voxels), and
+/// the volumes it read; under validation.
+fn paper_ao_at_centre(s: &Scene, n: u32) -> (f32, VoxelDump) {
+    let settings = RenderSettings {
+        width: 33,
+        height: 33,
+        mode: Mode::Ao,
+        accumulate: 1,
+        shadow_resolution: 64,
+        gi: GiSettings::paper(n),
+        ..Default::default()
+    };
+    let ctx = context();
+    let stats = ctx.stats.clone();
+    let out = {
+        let mut r = Renderer::new(&ctx, s, settings).expect("renderer");
+        r.render(true).expect("frame");
+        let image = r.radiance();
+        (image[16 * 33 + 16][0], r.read_voxels().unwrap().unwrap())
+    };
+    drop(ctx);
+    assert_eq!(stats.count(), 0, "{}", stats.messages().join("\n"));
+    out
+}
+
 #[test]
 fn paper_ambient_occlusion_is_the_originals() {
     // A floor with a wall standing 0.12 m from the point seen, and one 0.2 m away on the
@@ -187,25 +213,7 @@ fn paper_ambient_occlusion_is_the_originals() {
     }
     top_camera(&mut s, 2.0, 20.0);
     let n = 32;
-    let settings = RenderSettings {
-        width: 33,
-        height: 33,
-        mode: Mode::Ao,
-        accumulate: 1,
-        shadow_resolution: 64,
-        gi: GiSettings::paper(n),
-        ..Default::default()
-    };
-    let ctx = context();
-    let stats = ctx.stats.clone();
-    let (ao_gpu, dump) = {
-        let mut r = Renderer::new(&ctx, &s, settings).expect("renderer");
-        r.render(true).expect("frame");
-        let image = r.radiance();
-        (image[16 * 33 + 16][0], r.read_voxels().unwrap().unwrap())
-    };
-    drop(ctx);
-    assert_eq!(stats.count(), 0, "{}", stats.messages().join("\n"));
+    let (ao_gpu, dump) = paper_ao_at_centre(&s, n);
 
     let grid = VoxelGrid::fit(&s.bounds, n);
     let volumes = Volumes::new(grid, &dump);
@@ -242,25 +250,7 @@ fn paper_cones_read_the_edge_texels_past_the_grid() {
     let target = Vec3::new(0.9, 0.0, 0.9);
     look_at(&mut s, target + Vec3::new(0.0, 2.0, -0.2), target, 20.0);
     let n = 32;
-    let settings = RenderSettings {
-        width: 33,
-        height: 33,
-        mode: Mode::Ao,
-        accumulate: 1,
-        shadow_resolution: 64,
-        gi: GiSettings::paper(n),
-        ..Default::default()
-    };
-    let ctx = context();
-    let stats = ctx.stats.clone();
-    let (ao_gpu, dump) = {
-        let mut r = Renderer::new(&ctx, &s, settings).expect("renderer");
-        r.render(true).expect("frame");
-        let image = r.radiance();
-        (image[16 * 33 + 16][0], r.read_voxels().unwrap().unwrap())
-    };
-    drop(ctx);
-    assert_eq!(stats.count(), 0, "{}", stats.messages().join("\n"));
+    let (ao_gpu, dump) = paper_ao_at_centre(&s, n);
     let grid = VoxelGrid::fit(&s.bounds, n);
     let falloff = 0.5 * PAPER_AO_FALLOFF / grid.size;
     let mut volumes = Volumes::new(grid, &dump);

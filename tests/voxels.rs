@@ -47,6 +47,31 @@ fn anchor(s: &mut Scene, m: u32) {
     );
 }
 
+/// A Lambertian material whose base colour is a new non-sRGB texture of nearest texels.
+fn textured(s: &mut Scene, name: &str, width: u32, height: u32, rgba8: Vec<u8>, wrap: Wrap) -> u32 {
+    s.textures.push(Texture {
+        name: name.into(),
+        width,
+        height,
+        rgba8,
+        srgb: false,
+        wrap_s: wrap,
+        wrap_t: wrap,
+        mag_nearest: true,
+        min_nearest: true,
+    });
+    s.materials.push(Material {
+        base_color_tex: Some(TexRef {
+            texture: s.textures.len() as u32 - 1,
+            tex_coord: 0,
+        }),
+        metallic: 0.0,
+        specular_factor: 0.0,
+        ..Material::default()
+    });
+    s.materials.len() as u32 - 1
+}
+
 /// Fragments per target voxel: `counts[k]` triangles inside voxel k, each sampling texel
 /// `values[k](i)` of a grey ramp texture. Returns the scene and, per target, its voxel and the
 /// exact mean of what was written.
@@ -56,27 +81,8 @@ fn stacked_triangles(counts: &[u32], varied: bool, n: u32) -> (Scene, Vec<([u32;
     let ramp: Vec<u8> = (0..256u32)
         .flat_map(|t| [t as u8, t as u8, t as u8, 255])
         .collect();
-    s.textures.push(Texture {
-        name: "ramp".into(),
-        width: 256,
-        height: 1,
-        rgba8: ramp,
-        srgb: false,
-        wrap_s: Wrap::ClampToEdge,
-        wrap_t: Wrap::ClampToEdge,
-        mag_nearest: true,
-        min_nearest: true,
-    });
-    s.materials.push(Material {
-        base_color_tex: Some(TexRef {
-            texture: 0,
-            tex_coord: 0,
-        }),
-        metallic: 0.0,
-        specular_factor: 0.0,
-        ..Material::default()
-    });
-    anchor(&mut s, 0);
+    let m = textured(&mut s, "ramp", 256, 1, ramp, Wrap::ClampToEdge);
+    anchor(&mut s, m);
     let grid = VoxelGrid::fit(
         &voxgi::scene::Aabb {
             min: Vec3::ZERO,
@@ -113,7 +119,7 @@ fn stacked_triangles(counts: &[u32], varied: bool, n: u32) -> (Scene, Vec<([u32;
                     centre + Vec3::new(0.0, h, 0.0),
                 ],
                 [[u, 0.5]; 3],
-                0,
+                m,
             );
         }
         targets.push((c, sum / count as f32));
@@ -623,26 +629,14 @@ fn a_sliver_samples_its_own_texels_not_extrapolated_ones() {
     // thousands of its heights: attributes extrapolated that far read texels anywhere in the
     // texture (and took lavapipe minutes per draw for a building of such slivers).
     let mut s = empty_scene();
-    s.textures.push(Texture {
-        name: "red over green".into(),
-        width: 1,
-        height: 2,
-        rgba8: vec![255, 0, 0, 255, 0, 255, 0, 255],
-        srgb: false,
-        wrap_s: Wrap::Repeat,
-        wrap_t: Wrap::Repeat,
-        mag_nearest: true,
-        min_nearest: true,
-    });
-    s.materials.push(Material {
-        base_color_tex: Some(TexRef {
-            texture: 0,
-            tex_coord: 0,
-        }),
-        metallic: 0.0,
-        specular_factor: 0.0,
-        ..Material::default()
-    });
+    let red_green = textured(
+        &mut s,
+        "red over green",
+        1,
+        2,
+        vec![255, 0, 0, 255, 0, 255, 0, 255],
+        Wrap::Repeat,
+    );
     let grey = lambert(&mut s, Vec3::splat(0.5));
     anchor(&mut s, grey);
     let n = 32;
@@ -662,7 +656,12 @@ fn a_sliver_samples_its_own_texels_not_extrapolated_ones() {
         Vec3::new(0.2 * vs, 1e-4 * vs, 0.0),
     ]
     .map(|c| centre + turn * c);
-    triangle(&mut s, corners, [[0.5, 0.1], [0.5, 0.1], [0.5, 0.4]], 0);
+    triangle(
+        &mut s,
+        corners,
+        [[0.5, 0.1], [0.5, 0.1], [0.5, 0.4]],
+        red_green,
+    );
     let d = render_voxels(&s, voxel_settings(n, false, Mode::VoxelsAlbedo));
     let near = |i: usize| {
         let r = d.resolution as usize;
