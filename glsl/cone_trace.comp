@@ -17,6 +17,7 @@
 #include "voxel_common.glsl"
 #define CONE_SET 2
 #define CONE_FULL_RES 1
+#define CONE_LIGHT_PASS 1
 #include "cone_tracing.glsl"
 #include "brdf.glsl"
 #include "lights.glsl"

@@ -37,6 +37,16 @@ vec4 sample_directional(vec3 uvw, vec3 dir, float level, vec3 from, bool from_or
     vec4 sx = dir.x < 0.0 ? textureLod(aniso_nx, uvw, level) : textureLod(aniso_px, uvw, level);
     vec4 sy = dir.y < 0.0 ? textureLod(aniso_ny, uvw, level) : textureLod(aniso_py, uvw, level);
     vec4 sz = dir.z < 0.0 ? textureLod(aniso_nz, uvw, level) : textureLod(aniso_pz, uvw, level);
+#if defined(PAPER) && defined(CONE_LIGHT_PASS)
+    // --paper-slips: the original's light pass has the -X volume bound to all six units
+    // (gi_deferred_renderer.cpp binds mips[0] in its loop over them).
+    if ((frame.grid_info.w & FLAG_PAPER_SLIPS) != 0u) {
+        vec4 nx = textureLod(aniso_nx, uvw, level);
+        sx = nx;
+        sy = nx;
+        sz = nx;
+    }
+#endif
     vec4 s = w.x * sx + w.y * sy + w.z * sz;
 #ifndef PAPER
     // Each face volume shows light going at right angles to its axis, so a cone crossing a

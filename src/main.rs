@@ -144,6 +144,10 @@ struct GiOpts {
     /// Soft shadows: direct light shadowed by cones through the voxels
     #[arg(long)]
     cone_shadows: bool,
+    /// With --paper: the original's C++ slip reproduced, its light pass reading the -X
+    /// directional volume for all six directions
+    #[arg(long, requires = "paper")]
+    paper_slips: bool,
     /// The last bounce does not add the bounces after it (by default it adds them as a
     /// geometric series: the voxels' mean albedo times their closed share, at most 0.6, is each
     /// further bounce's share of the one before)
@@ -686,6 +690,7 @@ impl GiOpts {
         gi.step_factor = self.step.unwrap_or(gi.step_factor);
         gi.voxel_shadows = self.voxel_shadows;
         gi.cone_shadows = self.cone_shadows;
+        gi.paper_slips = self.paper_slips;
         gi.tail &= !self.no_tail;
         gi.area_lights &= !self.no_area_lights;
         gi.trace_scale = self.trace_scale.unwrap_or(gi.trace_scale);

@@ -57,6 +57,7 @@ fn bad_input_is_a_clear_error_with_no_output() {
         (vec!["render", "--width", "abc", "--out", o], "--width"),
         (vec!["render", "--mode", "sideways", "--out", o], "sideways"),
         (vec!["render", "--bogus"], "--bogus"),
+        (vec!["render", "--paper-slips", "--out", o], "--paper"),
         (vec!["render", "--bounces", "9", "--out", o], "--bounces"),
         (vec!["hard-cases", "--bounces", "0"], "--bounces"),
     ] {

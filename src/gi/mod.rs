@@ -56,6 +56,9 @@ pub struct GiSettings {
     pub voxel_shadows: bool,
     /// Pixels' direct light shadowed by a cone through the voxels instead of the shadow maps.
     pub cone_shadows: bool,
+    /// With `paper`: the original's C++ slip that binds the -X directional volume to all six of
+    /// the light pass's units, reproduced (docs/porting.md).
+    pub paper_slips: bool,
     /// Mip levels finer than the cone's diameter at which cones sample (the paper: 1).
     pub lod_offset: f32,
     /// The last bounce also adds the bounces after it, as a geometric series whose ratio is
@@ -109,6 +112,7 @@ impl Default for GiSettings {
             ao_falloff: 1.0,
             voxel_shadows: false,
             cone_shadows: false,
+            paper_slips: false,
             lod_offset: 1.0,
             // The closed rooms of docs/hard-cases.md lose a tenth of their light and more
             // without the third and later bounces; tracing them costs a bounce pass each.
@@ -303,6 +307,14 @@ pub const FIELDS: &[Field] = &[
         max: 1.0,
         get: |g| Value::Switch(g.cone_shadows),
         set: |g, v| g.cone_shadows = v != 0.0,
+    },
+    Field {
+        axis: "paper-slips",
+        column: "paper_slips",
+        min: 0.0,
+        max: 1.0,
+        get: |g| Value::Switch(g.paper_slips),
+        set: |g, v| g.paper_slips = v != 0.0,
     },
     Field {
         axis: "lod-offset",
@@ -574,6 +586,7 @@ pub const FLAG_EMISSIVE: u32 = 2;
 pub const FLAG_VOXEL_SHADOWS: u32 = 4;
 pub const FLAG_CONE_SHADOWS: u32 = 8;
 pub const FLAG_EMPTY_SPACE: u32 = 16;
+pub const FLAG_PAPER_SLIPS: u32 = 32;
 
 /// The voxel passes a renderer runs: only those its mode and scene need.
 pub struct Gi {
@@ -728,6 +741,10 @@ impl Gi {
             | flag(self.settings.voxel_shadows, FLAG_VOXEL_SHADOWS)
             | flag(self.settings.cone_shadows, FLAG_CONE_SHADOWS)
             | flag(self.empty_space.is_some(), FLAG_EMPTY_SPACE)
+            | flag(
+                self.settings.paper && self.settings.paper_slips,
+                FLAG_PAPER_SLIPS,
+            )
     }
 
     /// The voxel passes a frame records when `dirty` says what changed, in order: the volumes
@@ -1070,6 +1087,7 @@ mod tests {
             ao_falloff: _,
             voxel_shadows: _,
             cone_shadows: _,
+            paper_slips: _,
             lod_offset: _,
             tail: _,
             area_lights: _,
@@ -1078,7 +1096,7 @@ mod tests {
             specular_min_voxels: _,
             empty_space: _,
         } = GiSettings::default();
-        assert_eq!(FIELDS.len(), 18, "a setting without its line in FIELDS");
+        assert_eq!(FIELDS.len(), 19, "a setting without its line in FIELDS");
         for f in FIELDS {
             let d = GiSettings::default();
             let mut g = d.clone();
