@@ -87,8 +87,10 @@ void main() {
         float b0 = 1.0 - b1 - b2;
         int i0 = order[0], i1 = order[1], i2 = order[2];
 #ifdef PAPER
-        // The original keeps each vertex's own attributes on its grown corner.
-        g_normal = v_normal[order[i]];
+        // The original keeps each vertex's own attributes on its grown corner. --paper-slips:
+        // its winding flip swaps two corners' texture coordinates but not their normals.
+        bool slips = (frame.grid_info.w & FLAG_PAPER_SLIPS) != 0u;
+        g_normal = v_normal[slips ? i : order[i]];
         g_uv = v_uv[order[i]];
 #else
         g_normal = b0 * v_normal[i0] + b1 * v_normal[i1] + b2 * v_normal[i2];

@@ -144,8 +144,8 @@ struct GiOpts {
     /// Soft shadows: direct light shadowed by cones through the voxels
     #[arg(long)]
     cone_shadows: bool,
-    /// With --paper: the original's C++ slip reproduced, its light pass reading the -X
-    /// directional volume for all six directions
+    /// With --paper: the original's slips reproduced (its light pass reading the -X
+    /// directional volume for all six directions; normals not swapped on a winding flip)
     #[arg(long, requires = "paper")]
     paper_slips: bool,
     /// The last bounce does not add the bounces after it (by default it adds them as a

@@ -694,3 +694,85 @@ fn paper_slips_read_the_minus_x_volume_for_every_direction() {
         "with the six volumes bound: {bound}, with the slip {slipped}: the check cannot tell"
     );
 }
+
+#[test]
+fn paper_slips_keep_the_normals_unswapped_on_a_winding_flip() {
+    // Two triangles with a normal per corner: one wound clockwise in its projection (the
+    // original's geometry shader swaps two of its corners' positions and texture coordinates,
+    // but not their normals), one counter-clockwise (nothing swapped). With --paper-slips the
+    // first's voxels by its +X corner take the +Y corner's normal; the second's are unchanged.
+    let mut s = empty_scene();
+    let grey = lambert(&mut s, Vec3::splat(0.5));
+    // Bounds of the unit cube.
+    for p in [Vec3::ZERO, Vec3::ONE] {
+        triangle(&mut s, [p, p, p + Vec3::splat(1e-3)], [[0.0; 2]; 3], grey);
+    }
+    let l = 0.4;
+    let up = Vec3::new(0.0, 1.0, 1.0).normalize();
+    let side = Vec3::new(1.0, 0.0, 1.0).normalize();
+    let flipped = Vec3::new(0.3, 0.3, 0.5);
+    let kept = Vec3::new(0.3, 0.3, 0.2);
+    for (c, corners, normals) in [
+        (
+            flipped,
+            [Vec3::ZERO, Vec3::new(0.0, l, 0.0), Vec3::new(l, 0.0, 0.0)],
+            [Vec3::Z, up, side],
+        ),
+        (
+            kept,
+            [Vec3::ZERO, Vec3::new(l, 0.0, 0.0), Vec3::new(0.0, l, 0.0)],
+            [Vec3::Z, side, up],
+        ),
+    ] {
+        let base = s.vertices.len();
+        triangle(&mut s, corners.map(|p| c + p), [[0.0; 2]; 3], grey);
+        for (k, n) in normals.iter().enumerate() {
+            s.vertices[base + k].normal = n.to_array();
+        }
+    }
+    let n = 32;
+    let dump = |slips: bool| {
+        render_voxels(
+            &s,
+            RenderSettings {
+                width: 16,
+                height: 16,
+                mode: Mode::VoxelsNormal,
+                gi: GiSettings {
+                    paper_slips: slips,
+                    ..GiSettings::paper(n)
+                },
+                ..Default::default()
+            },
+        )
+    };
+    let (bound, slipped) = (dump(false), dump(true));
+    let grid = VoxelGrid::fit(&s.bounds, n);
+    let voxel = |p: Vec3| {
+        let v = ((p - grid.origin) / grid.voxel_size()).floor().as_uvec3();
+        bound.index(v.x, v.y, v.z)
+    };
+    // By the flipped triangle's +X corner: its own normal leans to +X, the slip's to +Y.
+    let i = voxel(flipped + Vec3::new(0.75 * l, 0.1 * l, 0.0));
+    assert!(bound.filled[i] && slipped.filled[i]);
+    let (a, b) = (bound.normal[i], slipped.normal[i]);
+    assert!(a.x > a.y + 0.2, "the corner's own normal leans to +X: {a}");
+    assert!(
+        b.y > b.x + 0.2,
+        "--paper-slips: the +Y corner's normal: {b}"
+    );
+    // The counter-clockwise triangle: the same voxels either way.
+    let layer = ((kept.z - grid.origin.z) / grid.voxel_size()).floor() as u32;
+    let mut same = 0;
+    for i in 0..bound.filled.len() {
+        let z = i as u32 / (n * n);
+        if bound.filled[i] && z == layer {
+            assert_eq!(
+                bound.normal[i], slipped.normal[i],
+                "voxel {i} of the kept triangle"
+            );
+            same += 1;
+        }
+    }
+    assert!(same > 20, "only {same} voxels of the kept triangle");
+}

@@ -56,8 +56,9 @@ pub struct GiSettings {
     pub voxel_shadows: bool,
     /// Pixels' direct light shadowed by a cone through the voxels instead of the shadow maps.
     pub cone_shadows: bool,
-    /// With `paper`: the original's C++ slip that binds the -X directional volume to all six of
-    /// the light pass's units, reproduced (docs/porting.md).
+    /// With `paper`: the original's slips reproduced where cheap (docs/porting.md): the -X
+    /// directional volume bound to all six of the light pass's units, and a winding flip that
+    /// swaps two corners' texture coordinates but not their normals.
     pub paper_slips: bool,
     /// Mip levels finer than the cone's diameter at which cones sample (the paper: 1).
     pub lod_offset: f32,
