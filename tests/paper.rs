@@ -89,19 +89,24 @@ impl<'a> Volumes<'a> {
         at(lo).lerp(at(hi), level - lo as f32)
     }
 
-    /// AnistropicSample: the three faces the direction sees, weighted by its squares, and the
-    /// full-resolution radiance mixed in below level 1.
-    fn sample(&self, uvw: Vec3, dir: Vec3, lod: f32) -> Vec4 {
-        let level = (lod - 1.0).max(0.0);
+    /// The three faces the direction sees at `level`, weighted by its squares (with the slip,
+    /// the -X face three times).
+    fn directional(&self, uvw: Vec3, dir: Vec3, level: f32) -> Vec4 {
         let w = dir * dir;
         let pick = |d: f32, neg: usize| match (self.slips, d < 0.0) {
             (true, _) => 0,
             (false, true) => neg,
             (false, false) => neg + 1,
         };
-        let s = w.x * self.face(pick(dir.x, 0), uvw, level)
+        w.x * self.face(pick(dir.x, 0), uvw, level)
             + w.y * self.face(pick(dir.y, 2), uvw, level)
-            + w.z * self.face(pick(dir.z, 4), uvw, level);
+            + w.z * self.face(pick(dir.z, 4), uvw, level)
+    }
+
+    /// AnistropicSample: the directional volumes one level below the cone's, and the
+    /// full-resolution radiance mixed in below level 1.
+    fn sample(&self, uvw: Vec3, dir: Vec3, lod: f32) -> Vec4 {
+        let s = self.directional(uvw, dir, (lod - 1.0).max(0.0));
         if lod < 1.0 {
             let n = self.grid.resolution as usize;
             trilinear(self.radiance, n, uvw, self.clamp).lerp(s, lod.clamp(0.0, 1.0))
@@ -135,6 +140,18 @@ fn paper_cone_occlusion(v: &Volumes, p: Vec3, n: Vec3, dir: Vec3, falloff: f32) 
     occlusion
 }
 
+/// The original's tangents about `n`: its guide (0, 1, 0), or (0, 0, 1) for a normal exactly
+/// along it; "right" the guide's part across `n`, "up" right x n.
+fn original_frame(n: Vec3) -> (Vec3, Vec3) {
+    let guide = if n.dot(Vec3::Y).abs() == 1.0 {
+        Vec3::Z
+    } else {
+        Vec3::Y
+    };
+    let right = (guide - n.dot(guide) * n).normalize();
+    (right, right.cross(n))
+}
+
 /// The original's ambient occlusion at `p`, normal `n`: its six cones, weights and frame, and
 /// 1 - the weighted sum of their occlusion (aoAlpha 0). `falloff` per metre; `over_pi`: the
 /// sum divided by pi first (what `--paper` did before).
@@ -156,13 +173,7 @@ fn paper_ao(v: &Volumes, p: Vec3, n: Vec3, falloff: f32, over_pi: bool) -> f32 {
         3.0 * pi / 20.0,
         3.0 * pi / 20.0,
     ];
-    let guide = if n.dot(Vec3::Y).abs() == 1.0 {
-        Vec3::Z
-    } else {
-        Vec3::Y
-    };
-    let right = (guide - n.dot(guide) * n).normalize();
-    let up = right.cross(n);
+    let (right, up) = original_frame(n);
     let mut sum = 0.0;
     for (d, w) in directions.iter().zip(weights) {
         let dir = (n + d[0] * right + d[2] * up).normalize();
@@ -412,12 +423,7 @@ fn propagation_cone(v: &Volumes, pos: Vec3, dir: Vec3, width: f32) -> Vec4 {
     }
     while cone.w <= 1.0 && dst <= 0.95 {
         let level = ((diameter * half).log2() - 1.0).max(0.0);
-        let w = dir * dir;
-        let pick = |d: f32, neg: usize| if d < 0.0 { neg } else { neg + 1 };
-        let s = w.x * v.face(pick(dir.x, 0), sample_pos, level)
-            + w.y * v.face(pick(dir.y, 2), sample_pos, level)
-            + w.z * v.face(pick(dir.z, 4), sample_pos, level);
-        cone += (1.0 - cone.w) * s;
+        cone += (1.0 - cone.w) * v.directional(sample_pos, dir, level);
         dst += diameter.max(texel);
         diameter = width * dst;
         sample_pos = pos + dir * dst;
@@ -440,13 +446,7 @@ fn propagation(v: &Volumes, dump: &VoxelDump, c: [u32; 3], normal_weight: f32, w
         [-0.754996, 0.5, -0.4330128],
     ];
     let weights = [pi / 3.0, 2.0 * pi / 9.0, 2.0 * pi / 9.0, 2.0 * pi / 9.0];
-    let guide = if n.dot(Vec3::Y).abs() == 1.0 {
-        Vec3::Z
-    } else {
-        Vec3::Y
-    };
-    let right = (guide - n.dot(guide) * n).normalize();
-    let up = right.cross(n);
+    let (right, up) = original_frame(n);
     let mut sum = Vec4::ZERO;
     for (d, w) in directions.iter().zip(weights) {
         let along = if d[0] == 0.0 && d[2] == 0.0 {
