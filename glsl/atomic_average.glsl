@@ -16,28 +16,29 @@ uint pack_rgba8(vec4 v) {
          | ((uint(v.w) & 0xFFu) << 24u);
 }
 
-// Each voxel is one 32-bit word, the bits of an RGBA8 texel seen through an r32ui view, in a
-// buffer reached by address (voxel_common.glsl; the paper's are r32ui 3D images, whose atomics
-// from successive draws trip synchronization validation).
-layout(buffer_reference, std430, buffer_reference_align = 4) coherent buffer CoherentWords {
-    uint w[];
-};
-
-void imageAtomicRGBA8Avg(CoherentWords grid, uint voxel, vec4 value) {
-    value.rgb *= 255.0;
-    uint new_value = pack_rgba8(vec4(value.rgb, 1.0));
-    uint prev = 0u;
-    uint cur;
-    int iterations = 0;
-    while ((cur = atomicCompSwap(grid.w[voxel], prev, new_value)) != prev && iterations < 255) {
-        prev = cur;
-        vec4 rval = unpack_rgba8(cur);
-        rval.rgb = rval.rgb * rval.a;
-        vec4 curf = rval + vec4(value.rgb, 1.0);
-        curf.rgb /= curf.a;
-        new_value = pack_rgba8(curf);
-        iterations++;
-    }
+// Each voxel is one 32-bit word of an r32ui 3D image, the bits of an RGBA8 texel. The loop
+// retries until no other fragment changed the word between its read and its swap. The
+// original takes the image as a parameter, `layout(r32ui) coherent volatile uimage3D grid`;
+// GLSL for Vulkan allows no format on a parameter, and image atomics need one, so the function
+// is written out once per volume: IMAGE_ATOMIC_RGBA8_AVG(grid) defines
+// imageAtomicRGBA8Avg_grid(ivec3 coords, vec4 value) for the image named grid.
+#define IMAGE_ATOMIC_RGBA8_AVG(grid) \
+void imageAtomicRGBA8Avg_##grid(ivec3 coords, vec4 value) { \
+    value.rgb *= 255.0; \
+    uint new_value = pack_rgba8(vec4(value.rgb, 1.0)); \
+    uint prev = 0u; \
+    uint cur; \
+    int iterations = 0; \
+    while ((cur = imageAtomicCompSwap(grid, coords, prev, new_value)) != prev \
+           && iterations < 255) { \
+        prev = cur; \
+        vec4 rval = unpack_rgba8(cur); \
+        rval.rgb = rval.rgb * rval.a; \
+        vec4 curf = rval + vec4(value.rgb, 1.0); \
+        curf.rgb /= curf.a; \
+        new_value = pack_rgba8(curf); \
+        iterations++; \
+    } \
 }
 
 #endif

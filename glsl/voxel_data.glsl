@@ -1,6 +1,7 @@
 // Reading a voxel back from what voxelization wrote. Define VOXEL_SET before including.
 // Default: fixed-point sums and counts of the static and (when present) dynamic passes,
-// averaged here. PAPER: the RGBA8 moving averages, empty when the 8-bit count reads 0.
+// averaged here. PAPER: the RGBA8 moving averages in r32ui images, empty when the 8-bit count
+// reads 0.
 #ifndef VOXEL_DATA_GLSL
 #define VOXEL_DATA_GLSL
 
@@ -18,25 +19,26 @@ struct Voxel {
 };
 
 #ifdef PAPER
-// The paper's words (PAPER_*).
-layout(set = VOXEL_SET, binding = 0, std430) readonly buffer PaperWords { uvec2 paper_words[4]; };
+// The paper's volumes (voxelize.frag wrote them; the original reads them through RGBA8 views).
+layout(set = VOXEL_SET, binding = 0, r32ui) readonly uniform uimage3D paper_albedo;
+layout(set = VOXEL_SET, binding = 1, r32ui) readonly uniform uimage3D paper_normal;
+layout(set = VOXEL_SET, binding = 2, r32ui) readonly uniform uimage3D paper_emission;
 
 bool voxel_filled(ivec3 c) {
-    return (Words(paper_words[PAPER_ALBEDO]).w[voxel_index(c)] >> 24u) != 0u;
+    return (imageLoad(paper_albedo, c).r >> 24u) != 0u;
 }
 
 Voxel load_voxel(ivec3 c) {
     Voxel v;
-    uint i = voxel_index(c);
-    vec4 a = unpack_rgba8(Words(paper_words[PAPER_ALBEDO]).w[i]);
+    vec4 a = unpack_rgba8(imageLoad(paper_albedo, c).r);
     v.filled = a.a > 0.0;
     v.albedo = a.rgb / 255.0;
-    vec3 n = unpack_rgba8(Words(paper_words[PAPER_NORMAL]).w[i]).rgb / 255.0 * 2.0 - 1.0;
+    vec3 n = unpack_rgba8(imageLoad(paper_normal, c).r).rgb / 255.0 * 2.0 - 1.0;
     v.agreement = length(n);
     v.normal = v.agreement > 0.0 ? n / v.agreement : vec3(0.0);
     v.axis_weights = v.normal * v.normal;
     v.emission = (frame.grid_info.w & FLAG_EMISSIVE) != 0u
-        ? unpack_rgba8(Words(paper_words[PAPER_EMISSION]).w[i]).rgb / 255.0 : vec3(0.0);
+        ? unpack_rgba8(imageLoad(paper_emission, c).r).rgb / 255.0 : vec3(0.0);
     v.offset = vec3(0.0);
     return v;
 }

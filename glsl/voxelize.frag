@@ -3,8 +3,8 @@
 // Voxelization, step 1 of the paper: each fragment averages the surface's albedo, normal and
 // emission into its voxel. The default path sums fixed-point values with a 32-bit count
 // (atomicAdd), writes every voxel the triangle crosses within the pixel's column (so a closed mesh
-// stays watertight), and keeps emission HDR. PAPER: the original imageAtomicRGBA8Avg into RGBA8
-// words (RGBA8 texels as r32ui), one voxel per fragment, normals encoded n * 0.5 + 0.5.
+// stays watertight), and keeps emission HDR. PAPER: the original imageAtomicRGBA8Avg into r32ui
+// 3D images (the bits of RGBA8 texels), one voxel per fragment, normals encoded n * 0.5 + 0.5.
 #include "common.glsl"
 #include "material.glsl"
 #include "voxel_common.glsl"
@@ -29,10 +29,19 @@ layout(location = 6) flat in vec4 g_tri01;
 layout(location = 7) flat in vec2 g_tri2;
 #endif
 
-// This pass's words: their addresses (voxel_common.glsl: WORDS_*, or PAPER_*).
-layout(set = 2, binding = 0, std430) readonly buffer Target { uvec2 target[4]; };
 #ifdef PAPER
+// The original's volumes: RGBA8 averages in r32ui images, and its static flags.
+layout(set = 2, binding = 0, r32ui) coherent volatile uniform uimage3D paper_albedo;
+layout(set = 2, binding = 1, r32ui) coherent volatile uniform uimage3D paper_normal;
+layout(set = 2, binding = 2, r32ui) coherent volatile uniform uimage3D paper_emission;
+layout(set = 2, binding = 3, r8) uniform image3D paper_flag;
 #include "atomic_average.glsl"
+IMAGE_ATOMIC_RGBA8_AVG(paper_albedo)
+IMAGE_ATOMIC_RGBA8_AVG(paper_normal)
+IMAGE_ATOMIC_RGBA8_AVG(paper_emission)
+#else
+// This pass's words: their addresses (voxel_common.glsl: WORDS_*).
+layout(set = 2, binding = 0, std430) readonly buffer Target { uvec2 target[4]; };
 #endif
 
 #ifndef PAPER
@@ -101,26 +110,21 @@ void main() {
     float depth = dot(g_plane.xy, px) + g_plane.z;
 #ifdef PAPER
     ivec3 c = unswizzle(ivec3(ivec2(px), int(depth)));
-    if (!in_grid(c)) return;  // dilated triangles reach -1 and N: no-ops in GL, UB in Vulkan
-    uint voxel = voxel_index(c);
+    // Dilated triangles reach -1 and N: no-ops in GL, out of bounds in Vulkan.
+    if (!in_grid(c)) return;
     bool static_pass = (draw.flags & 2u) != 0u;
-    CoherentWords albedo_grid = CoherentWords(target[PAPER_ALBEDO]);
-    CoherentWords normal_grid = CoherentWords(target[PAPER_NORMAL]);
-    CoherentWords emission_grid = CoherentWords(target[PAPER_EMISSION]);
-    Words static_flag = Words(target[PAPER_FLAG]);
-    if (!static_pass && (frame.grid_info.w & FLAG_DYNAMIC) != 0u && static_flag.w[voxel] != 0u) {
+    bool dynamic = (frame.grid_info.w & FLAG_DYNAMIC) != 0u;
+    if (!static_pass && dynamic && imageLoad(paper_flag, c).r > 0.0) {
         return;  // the paper hides dynamic geometry inside static voxels
     }
     // The original's textures are not decoded from sRGB: its voxels hold gamma-space albedo
     // (cone_trace.comp raises the indirect light to 2.2 in the end).
-    imageAtomicRGBA8Avg(albedo_grid, voxel, vec4(pow(base.rgb, vec3(1.0 / 2.2)) * opacity, 1.0));
-    imageAtomicRGBA8Avg(normal_grid, voxel, vec4(normal * 0.5 + 0.5, 1.0));
+    imageAtomicRGBA8Avg_paper_albedo(c, vec4(pow(base.rgb, vec3(1.0 / 2.2)) * opacity, 1.0));
+    imageAtomicRGBA8Avg_paper_normal(c, vec4(normal * 0.5 + 0.5, 1.0));
     if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u) {
-        imageAtomicRGBA8Avg(emission_grid, voxel, vec4(emission, 1.0));
+        imageAtomicRGBA8Avg_paper_emission(c, vec4(emission, 1.0));
     }
-    if (static_pass && (frame.grid_info.w & FLAG_DYNAMIC) != 0u) {
-        atomicOr(static_flag.w[voxel], 1u);  // atomic: draws write it without barriers between
-    }
+    if (static_pass && dynamic) imageStore(paper_flag, c, vec4(1.0));
 #else
     // Every voxel of this column the triangle's plane crosses within the pixel, clamped to the
     // triangle's own depth range.

@@ -6,7 +6,9 @@
 mod gpu;
 use gpu::context;
 use gpu_allocator::MemoryLocation;
-use voxgi::vk::{vk, AddressTable, Bindings, Buffer, Context, Pass, Usage, VkError};
+use voxgi::vk::{
+    vk, AddressTable, Bindings, Buffer, Context, Image, ImageDesc, Pass, Usage, VkError,
+};
 
 fn words(ctx: &std::sync::Arc<Context>, name: &str) -> Buffer {
     Buffer::new(
@@ -19,11 +21,20 @@ fn words(ctx: &std::sync::Arc<Context>, name: &str) -> Buffer {
     .unwrap()
 }
 
+fn words_buffer(ctx: &std::sync::Arc<Context>) -> Buffer {
+    words(ctx, "some buffer")
+}
+
 fn problem(r: Result<Pass, VkError>) -> String {
     match r {
         Ok(_) => panic!("the pass was made"),
         Err(e) => e.to_string(),
     }
+}
+
+fn volume(ctx: &std::sync::Arc<Context>, name: &str, format: vk::Format) -> Image {
+    let usage = vk::ImageUsageFlags::STORAGE;
+    Image::new(ctx, name, ImageDesc::d3(format, 4, usage)).unwrap()
 }
 
 #[test]
@@ -32,20 +43,30 @@ fn a_buffer_reached_by_address_without_a_declared_access_is_caught() {
     let stats = ctx.stats.clone();
     {
         let (albedo, normal) = (words(&ctx, "albedo words"), words(&ctx, "normal words"));
-        let table =
-            AddressTable::new(&ctx, "word addresses", &[Some(&albedo), Some(&normal)]).unwrap();
-        // clear_dynamic.comp reaches the paper's words through the table at "PaperWords".
-        let both = Bindings::new()
-            .addresses("PaperWords", &table)
-            .reaches(&albedo, Usage::ReadWrite)
-            .reaches(&normal, Usage::ReadWrite);
-        assert!(Pass::compute(&ctx, "clear_dynamic.comp", &[], both, 4).is_ok());
-        let one = Bindings::new()
-            .addresses("PaperWords", &table)
-            .reaches(&albedo, Usage::ReadWrite);
-        let p = problem(Pass::compute(&ctx, "clear_dynamic.comp", &[], one, 4));
+        let list = words(&ctx, "list");
+        let usage = vk::BufferUsageFlags::UNIFORM_BUFFER;
+        let frame = Buffer::new(&ctx, "frame", 4096, usage, MemoryLocation::GpuOnly).unwrap();
+        let s = AddressTable::new(&ctx, "static addresses", &[Some(&albedo), Some(&normal)]);
+        let d = AddressTable::new(&ctx, "dynamic addresses", &[]);
+        let (s, d) = (s.unwrap(), d.unwrap());
+        // voxel_list.comp reaches the default's words through the tables at "StaticWords"
+        // and "DynamicWords" (glsl/voxel_data.glsl).
+        let table = || {
+            Bindings::new()
+                .uniform("frame", &frame)
+                .buffer("VoxelList", &list, Usage::ReadWrite)
+                .addresses("StaticWords", &s)
+                .addresses("DynamicWords", &d)
+        };
+        let both = table()
+            .reaches(&albedo, Usage::Read)
+            .reaches(&normal, Usage::Read);
+        let made = Pass::compute(&ctx, "voxel_list.comp", &[], both, 0);
+        assert!(made.is_ok(), "{:?}", made.err());
+        let one = table().reaches(&albedo, Usage::Read);
+        let p = problem(Pass::compute(&ctx, "voxel_list.comp", &[], one, 0));
         assert!(
-            p.contains("clear_dynamic.comp") && p.contains("normal words"),
+            p.contains("voxel_list.comp") && p.contains("normal words"),
             "{p}"
         );
     }
@@ -58,42 +79,39 @@ fn a_table_that_disagrees_with_its_shader_is_caught() {
     let ctx = context();
     let stats = ctx.stats.clone();
     {
-        let buffer = words(&ctx, "some buffer");
-        let table = AddressTable::new(&ctx, "word addresses", &[Some(&buffer)]).unwrap();
-        let ok = || {
+        let words = vk::Format::R32_UINT;
+        let albedo = volume(&ctx, "albedo", words);
+        let normal = volume(&ctx, "normal", words);
+        let emission = volume(&ctx, "emission", words);
+        let flag = volume(&ctx, "flag", vk::Format::R8_UNORM);
+        let buffer = words_buffer(&ctx);
+        // clear_dynamic.comp writes the paper's three averages and reads its flags.
+        let three = || {
             Bindings::new()
-                .addresses("PaperWords", &table)
-                .reaches(&buffer, Usage::ReadWrite)
+                .image("paper_albedo", &albedo, Usage::Write)
+                .image("paper_normal", &normal, Usage::Write)
+                .image("paper_emission", &emission, Usage::Write)
         };
+        let ok = || three().image("paper_flag", &flag, Usage::Read);
         // A binding the shader uses and the table lacks.
-        let p = problem(Pass::compute(
-            &ctx,
-            "clear_dynamic.comp",
-            &[],
-            Bindings::new(),
-            4,
-        ));
+        let p = problem(Pass::compute(&ctx, "clear_dynamic.comp", &[], three(), 4));
         assert!(
-            p.contains("PaperWords") && p.contains("does not bind"),
+            p.contains("paper_flag") && p.contains("does not bind"),
             "{p}"
         );
         // Declared written where the shader only reads (readonly).
-        let written = Bindings::new()
-            .buffer("PaperWords", &table.buffer, Usage::ReadWrite)
-            .reaches(&buffer, Usage::ReadWrite);
+        let written = three().image("paper_flag", &flag, Usage::ReadWrite);
         let p = problem(Pass::compute(&ctx, "clear_dynamic.comp", &[], written, 4));
         assert!(p.contains("readonly"), "{p}");
-        // Another type: a uniform buffer where the shader has a storage buffer.
-        let uniform = Bindings::new()
-            .uniform("PaperWords", &table.buffer)
-            .reaches(&buffer, Usage::ReadWrite);
-        let p = problem(Pass::compute(&ctx, "clear_dynamic.comp", &[], uniform, 4));
-        assert!(p.contains("UNIFORM_BUFFER"), "{p}");
+        // Another type: a storage buffer where the shader has a storage image.
+        let other = three().buffer("paper_flag", &buffer, Usage::Read);
+        let p = problem(Pass::compute(&ctx, "clear_dynamic.comp", &[], other, 4));
+        assert!(p.contains("STORAGE_BUFFER"), "{p}");
         // Push constants of another size.
         let p = problem(Pass::compute(&ctx, "clear_dynamic.comp", &[], ok(), 8));
         assert!(p.contains("push constants take 4 bytes"), "{p}");
         // A binding bound twice.
-        let twice = ok().buffer("PaperWords", &buffer, Usage::Read);
+        let twice = ok().image("paper_flag", &flag, Usage::Read);
         let p = problem(Pass::compute(&ctx, "clear_dynamic.comp", &[], twice, 4));
         assert!(p.contains("twice"), "{p}");
         assert!(Pass::compute(&ctx, "clear_dynamic.comp", &[], ok(), 4).is_ok());

@@ -5,6 +5,7 @@ mod gpu;
 use glam::Vec3;
 use gpu::*;
 use gpu_allocator::MemoryLocation;
+use voxgi::gi::GiSettings;
 use voxgi::render::{Mode, RenderSettings, Renderer};
 use voxgi::scene::LightKind;
 use voxgi::vk::{vk, Access, Buffer, Graph, ResourceStates};
@@ -54,6 +55,49 @@ fn omitted_barrier_is_reported_by_synchronization_validation() {
     );
 }
 
+/// One pass of two steps, each writing the same buffer; returns the validation messages.
+fn two_steps(omit: Option<&str>) -> Vec<String> {
+    let ctx = context();
+    let stats = ctx.stats.clone();
+    {
+        let buf = Buffer::new(
+            &ctx,
+            "stepped target",
+            1024,
+            vk::BufferUsageFlags::TRANSFER_DST,
+            MemoryLocation::GpuOnly,
+        )
+        .unwrap();
+        let mut states = ResourceStates::default();
+        ctx.one_shot(|cmd| {
+            let mut g = Graph::new(&ctx, cmd, &mut states, None);
+            g.omit_barriers_of = omit.map(String::from);
+            g.pass("steps")
+                .buffer(&buf, Access::TransferWrite)
+                .record_steps(2, |cmd, step| unsafe {
+                    ctx.device
+                        .cmd_fill_buffer(cmd, buf.raw, 0, 1024, step as u32)
+                });
+        })
+        .unwrap();
+    }
+    drop(ctx);
+    stats.messages()
+}
+
+#[test]
+fn steps_of_a_pass_get_the_barriers_between_them() {
+    let clean = two_steps(None);
+    assert!(clean.is_empty(), "with barriers: {clean:#?}");
+    let hazard = two_steps(Some("steps between steps"));
+    assert!(
+        hazard
+            .iter()
+            .any(|m| m.contains("SYNC-HAZARD-WRITE-AFTER-WRITE") && m.contains("steps")),
+        "no write-after-write hazard between the steps: {hazard:#?}"
+    );
+}
+
 #[test]
 fn renderer_pass_without_its_barriers_is_reported() {
     let mut s = empty_scene();
@@ -85,5 +129,81 @@ fn renderer_pass_without_its_barriers_is_reported() {
     assert!(
         msgs.iter().any(|m| m.contains("SYNC-HAZARD")),
         "no hazard reported without the lighting pass's barriers: {msgs:#?}"
+    );
+}
+
+/// Two overlapping floors voxelized by --paper (two draws averaging into the same r32ui
+/// images), a small moving quad above them (so the static draws write the static flags), and
+/// a point light; the barriers of the pass `omit` left out. Returns the messages.
+fn paper_frame(omit: Option<&str>) -> Vec<String> {
+    let mut s = empty_scene();
+    let m = lambert(&mut s, Vec3::splat(0.5));
+    floor(&mut s, 2.0, m);
+    floor(&mut s, 1.0, m);
+    let (a, b) = (0.3, 0.5);
+    quad(
+        &mut s,
+        [
+            Vec3::new(-a, b, a),
+            Vec3::new(a, b, a),
+            Vec3::new(a, b, -a),
+            Vec3::new(-a, b, -a),
+        ],
+        m,
+    );
+    top_camera(&mut s, 3.0, 60.0);
+    s.lights.push(light(
+        LightKind::Point,
+        Vec3::splat(5.0),
+        Vec3::new(0.0, 1.0, 0.0),
+        Vec3::NEG_Y,
+    ));
+    let ctx = context();
+    let stats = ctx.stats.clone();
+    {
+        let settings = RenderSettings {
+            width: 32,
+            height: 32,
+            shadow_resolution: 64,
+            gi: GiSettings::paper(16),
+            dynamic_nodes: vec![s.instances[2].node],
+            ..Default::default()
+        };
+        let mut r = Renderer::new(&ctx, &s, settings).unwrap();
+        r.omit_barriers_of = omit.map(String::from);
+        r.render(true).unwrap();
+    }
+    drop(ctx);
+    stats.messages()
+}
+
+/// Whether a message reports a hazard of `kind` on the image named `image`.
+fn hazard_on(msgs: &[String], kind: &str, image: &str) -> bool {
+    msgs.iter()
+        .any(|m| m.contains(kind) && m.contains(&format!("[{image}]")))
+}
+
+#[test]
+fn paper_voxel_images_are_seen_by_synchronization_validation() {
+    let clean = paper_frame(None);
+    assert!(clean.is_empty(), "with barriers: {clean:#?}");
+    // The draws averaging into the volumes (and storing the static flags) with no barrier
+    // after their clear.
+    let draws = paper_frame(Some("voxelize static"));
+    for image in ["voxel albedo", "voxel normal"] {
+        assert!(
+            hazard_on(&draws, "SYNC-HAZARD-READ-AFTER-WRITE", image),
+            "no hazard on the draws' atomics on {image}: {draws:#?}"
+        );
+    }
+    assert!(
+        hazard_on(&draws, "SYNC-HAZARD-WRITE-AFTER-WRITE", "static flags"),
+        "no hazard on the draws' flags: {draws:#?}"
+    );
+    // Injection reading the averages with no barrier after the draws.
+    let read = paper_frame(Some("inject"));
+    assert!(
+        hazard_on(&read, "SYNC-HAZARD-READ-AFTER-WRITE", "voxel albedo"),
+        "no hazard on reading the paper's voxels: {read:#?}"
     );
 }

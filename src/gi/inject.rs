@@ -6,11 +6,11 @@ use crate::vk::{vk, Bindings, Context, Graph, Image, Pass, Sampler, SharedSet, U
 use std::sync::Arc;
 
 /// The voxel data as the compute passes read it (glsl/voxel_data.glsl): the tables of the
-/// words' addresses (the static and the dynamic pass's, or --paper's one) and a read of every
-/// buffer of words they point to.
+/// words' addresses (the static and the dynamic pass's) and a read of every buffer of words
+/// they point to, or --paper's images.
 pub fn read_voxel_data(table: Bindings, volumes: &Volumes) -> Bindings {
     let table = match &volumes.data {
-        VoxelData::Paper { .. } => table.addresses("PaperWords", &volumes.words[0]),
+        VoxelData::Paper(p) => return p.bind(table, Usage::Read),
         VoxelData::Sums { .. } => table
             .addresses("StaticWords", &volumes.words[0])
             .addresses("DynamicWords", &volumes.words[1]),

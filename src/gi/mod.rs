@@ -17,6 +17,7 @@ pub use volumes::{VolumeInfo, Volumes};
 use crate::scene::Aabb;
 use crate::vk::{vk, Access, Buffer, Context, Graph, Pipeline, SharedSet, VertexLayout, VkResult};
 use glam::{Vec3, Vec4};
+use std::ops::Range;
 use std::sync::Arc;
 
 pub use bounce::{list_capacity, Bounce};
@@ -997,11 +998,21 @@ pub struct StepInputs<'a> {
     /// The scene's vertex and index buffers, which voxelization draws from.
     pub geometry: (&'a Buffer, &'a Buffer),
     pub scene_set: vk::DescriptorSet,
-    /// Draws the static (or the dynamic) instances with the voxelization pipeline and the
-    /// given push-constant flags.
-    pub draw_static: &'a dyn Fn(vk::CommandBuffer, &Pipeline, u32),
-    pub draw_dynamic: &'a dyn Fn(vk::CommandBuffer, &Pipeline, u32),
+    pub draw_static: VoxelDraws<'a>,
+    pub draw_dynamic: VoxelDraws<'a>,
 }
+
+/// The static (or the dynamic) instances, as voxelization draws them.
+#[derive(Clone, Copy)]
+pub struct VoxelDraws<'a> {
+    pub count: usize,
+    /// Draws those of the range (of `0..count`) with the voxelization pipeline and the given
+    /// push-constant flags.
+    pub draw: &'a DrawRange<'a>,
+}
+
+/// Draws a range of instances with a pipeline and push-constant flags.
+pub type DrawRange<'a> = dyn Fn(vk::CommandBuffer, &Pipeline, u32, Range<usize>) + 'a;
 
 #[cfg(test)]
 mod tests {

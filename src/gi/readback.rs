@@ -235,16 +235,12 @@ impl Gi {
                     }
                 }
             }
-            VoxelData::Paper {
-                albedo,
-                normal,
-                emission,
-                ..
-            } => {
-                sources.push(("pa".into(), Src::Buf(albedo)));
-                sources.push(("pn".into(), Src::Buf(normal)));
-                if let Some(e) = emission {
-                    sources.push(("pe".into(), Src::Buf(e)));
+            VoxelData::Paper(p) => {
+                let n = self.volumes.grid.resolution;
+                sources.push(("pa".into(), Src::Img(&p.albedo, 4, 0, n)));
+                sources.push(("pn".into(), Src::Img(&p.normal, 4, 0, n)));
+                if p.emissive {
+                    sources.push(("pe".into(), Src::Img(&p.emission, 4, 0, n)));
                 }
             }
         }

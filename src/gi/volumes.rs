@@ -1,7 +1,10 @@
 //! The GPU memory of the voxel passes: only what the scene and the settings need.
 
 use super::{GiSettings, VoxelGrid};
-use crate::vk::{vk, AddressTable, Buffer, Context, Image, ImageDesc, Sampler, VkError, VkResult};
+use crate::vk::{
+    vk, AddressTable, Bindings, Buffer, Context, Image, ImageDesc, Sampler, Usage, VkError,
+    VkResult,
+};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
 
@@ -45,20 +48,51 @@ impl Sums {
     }
 }
 
-/// What voxelization writes, per mode.
+/// What voxelization writes, per mode (one per renderer: the variants' sizes do not matter).
+#[allow(clippy::large_enum_variant)]
 pub enum VoxelData {
     /// Fixed-point sums and counts: static pass, and dynamic pass when there is dynamic geometry.
     Sums {
         static_sums: Sums,
         dynamic_sums: Option<Box<Sums>>,
     },
-    /// The paper's RGBA8 moving averages (one r32ui word per voxel), and its static flags.
-    Paper {
-        albedo: Buffer,
-        normal: Buffer,
-        emission: Option<Buffer>,
-        flag: Option<Buffer>,
-    },
+    /// The paper's RGBA8 moving averages in r32ui 3D images, and its static flags.
+    Paper(PaperVolumes),
+}
+
+/// The original's voxel volumes: RGBA8 moving averages in r32ui 3D storage images (the bits of
+/// an RGBA8 texel, averaged by imageAtomicCompSwap), and its R8 static flags. Emission and
+/// flags are one texel, never read, where the scene emits nothing or nothing moves: the
+/// shaders' bindings stay.
+pub struct PaperVolumes {
+    pub albedo: Image,
+    pub normal: Image,
+    pub emission: Image,
+    pub flag: Image,
+    pub emissive: bool,
+    pub dynamic: bool,
+}
+
+impl PaperVolumes {
+    /// The volumes voxelization writes and the static pass clears (the flags where nodes move).
+    pub fn images(&self) -> Vec<&Image> {
+        let mut v = vec![&self.albedo, &self.normal];
+        if self.emissive {
+            v.push(&self.emission);
+        }
+        if self.dynamic {
+            v.push(&self.flag);
+        }
+        v
+    }
+
+    /// Binds the averages as glsl/voxel_data.glsl and voxelize.frag name them, used `usage`.
+    pub fn bind(&self, table: Bindings, usage: Usage) -> Bindings {
+        table
+            .image("paper_albedo", &self.albedo, usage)
+            .image("paper_normal", &self.normal, usage)
+            .image("paper_emission", &self.emission, usage)
+    }
 }
 
 impl VoxelData {
@@ -72,16 +106,8 @@ impl VoxelData {
                 true => dynamic_sums.iter().flat_map(|s| s.buffers()).collect(),
                 false => static_sums.buffers().collect(),
             },
-            // The paper's passes share its volumes; the dynamic one reads the flags.
-            VoxelData::Paper {
-                albedo,
-                normal,
-                emission,
-                flag,
-            } => [Some(albedo), Some(normal), emission.as_ref(), flag.as_ref()]
-                .into_iter()
-                .flatten()
-                .collect(),
+            // Images, not buffers (PaperVolumes::images).
+            VoxelData::Paper(_) => Vec::new(),
         }
     }
 
@@ -95,8 +121,7 @@ impl VoxelData {
     }
 
     /// The buffers in the address tables of the static and the dynamic pass (none where
-    /// absent); --paper: albedo, normal, emission, flag in the first (glsl/voxel_common.glsl:
-    /// PAPER_*).
+    /// absent; none for --paper, whose volumes are images).
     fn tables(&self) -> [[Option<&Buffer>; 4]; 2] {
         match self {
             VoxelData::Sums {
@@ -106,15 +131,7 @@ impl VoxelData {
                 static_sums.table(),
                 dynamic_sums.as_ref().map_or([None; 4], |d| d.table()),
             ],
-            VoxelData::Paper {
-                albedo,
-                normal,
-                emission,
-                flag,
-            } => [
-                [Some(albedo), Some(normal), emission.as_ref(), flag.as_ref()],
-                [None; 4],
-            ],
+            VoxelData::Paper(_) => [[None; 4], [None; 4]],
         }
     }
 }
@@ -443,7 +460,7 @@ fn check_grid_fits(ctx: &Context, grid: VoxelGrid, settings: &GiSettings) -> VkR
     // chains): 2^31 words, 8 GiB, wherever a device allocates more.
     let limit = ctx.max_allocation.min(1 << 33);
     let (widest, texel) = if settings.paper {
-        ("voxel albedo (RGBA8 words)", 4)
+        ("voxel albedo (r32ui image)", 4)
     } else {
         ("static voxel counts and albedo sums", ALBEDO_STRIDE * 4)
     };
@@ -465,7 +482,45 @@ fn check_grid_fits(ctx: &Context, grid: VoxelGrid, settings: &GiSettings) -> VkR
     Ok(())
 }
 
-/// Voxelization's accumulators: the original's RGBA8 words, or the default's fixed-point sums
+/// The original's volumes: r32ui averages and R8 flags, one texel where unused.
+fn paper_volumes(
+    ctx: &Arc<Context>,
+    n: u32,
+    emissive: bool,
+    dynamic: bool,
+    info: &mut Vec<VolumeInfo>,
+) -> VkResult<PaperVolumes> {
+    // TRANSFER: the static pass clears them, the debug readback copies them.
+    let usage = vk::ImageUsageFlags::STORAGE
+        | vk::ImageUsageFlags::TRANSFER_DST
+        | vk::ImageUsageFlags::TRANSFER_SRC;
+    let mut volume = |name: &str, format: vk::Format, texel: u64, used: bool| {
+        let side = if used { n } else { 1 };
+        if used {
+            info.push(VolumeInfo {
+                name: format!("{name} ({format:?})"),
+                bytes: (n as u64).pow(3) * texel,
+            });
+        }
+        let name = if used {
+            name.to_string()
+        } else {
+            format!("{name} (unused)")
+        };
+        Image::new(ctx, &name, ImageDesc::d3(format, side, usage))
+    };
+    let words = vk::Format::R32_UINT;
+    Ok(PaperVolumes {
+        albedo: volume("voxel albedo", words, 4, true)?,
+        normal: volume("voxel normal", words, 4, true)?,
+        emission: volume("voxel emission", words, 4, emissive)?,
+        flag: volume("static flags", vk::Format::R8_UNORM, 1, dynamic)?,
+        emissive,
+        dynamic,
+    })
+}
+
+/// Voxelization's accumulators: the original's RGBA8 averages, or the default's fixed-point sums
 /// (static, and dynamic when nodes move).
 fn voxel_data(
     ctx: &Arc<Context>,
@@ -495,14 +550,13 @@ fn voxel_data(
         )
     };
     let data = if settings.paper {
-        VoxelData::Paper {
-            albedo: buffer("voxel albedo (RGBA8 words)", 1)?,
-            normal: buffer("voxel normal (RGBA8 words)", 1)?,
-            emission: emissive
-                .then(|| buffer("voxel emission (RGBA8 words)", 1))
-                .transpose()?,
-            flag: dynamic.then(|| buffer("static flags", 1)).transpose()?,
-        }
+        VoxelData::Paper(paper_volumes(
+            ctx,
+            grid.resolution,
+            emissive,
+            dynamic,
+            info,
+        )?)
     } else {
         let mut sums = |pass: &str| -> VkResult<Sums> {
             Ok(Sums {

@@ -3,10 +3,11 @@
 //! voxels were made again) while static voxels stay.
 
 use super::volumes::{Volumes, VoxelData};
+use super::VoxelDraws;
 use crate::vk::pipeline::area;
 use crate::vk::{
-    vk, Access, Bindings, Buffer, Context, Graph, GraphicsDesc, Pass, Pipeline, Program, SharedSet,
-    Usage, VertexLayout, VkResult,
+    vk, Access, Bindings, Buffer, Context, Graph, GraphicsDesc, Pass, Program, SharedSet, Usage,
+    VertexLayout, VkResult,
 };
 use std::sync::Arc;
 
@@ -17,7 +18,7 @@ pub const EMITTER_LIGHT: u32 = 4;
 
 pub struct Voxelizer {
     /// Two instances: the static pass's words, then the dynamic pass's (the paper's passes
-    /// share one set of volumes).
+    /// share one set of volumes, its r32ui images).
     pub pass: Pass,
     /// PAPER: zeroes the dynamic voxels (where the flag is 0).
     clear_dynamic: Option<Pass>,
@@ -34,37 +35,33 @@ impl Voxelizer {
         push_size: u32,
         paper: bool,
     ) -> VkResult<Voxelizer> {
-        // Each pass reaches its words through its table of addresses; it writes them all.
-        let target = |dynamic: bool| {
-            // The default's dynamic table points nowhere without dynamic geometry (and that
-            // pass never runs then).
-            let words = match &volumes.data {
-                VoxelData::Sums { .. } if dynamic => &volumes.words[1],
-                _ => &volumes.words[0],
-            };
-            volumes
-                .data
-                .written_by(dynamic)
-                .into_iter()
-                .fold(Bindings::new().addresses("Target", words), |t, b| {
-                    t.reaches(b, Usage::ReadWrite)
-                })
+        // Each default pass reaches its words through its table of addresses; it writes them
+        // all. The paper's passes bind its images (and the flags: the static pass writes them,
+        // the dynamic one reads them).
+        let target = |dynamic: bool| match &volumes.data {
+            VoxelData::Paper(p) => p.bind(Bindings::new(), Usage::ReadWrite).image(
+                "paper_flag",
+                &p.flag,
+                Usage::ReadWrite,
+            ),
+            VoxelData::Sums { .. } => {
+                // The dynamic table points nowhere without dynamic geometry (and that pass
+                // never runs then).
+                let words = &volumes.words[dynamic as usize];
+                volumes
+                    .data
+                    .written_by(dynamic)
+                    .into_iter()
+                    .fold(Bindings::new().addresses("Target", words), |t, b| {
+                        t.reaches(b, Usage::ReadWrite)
+                    })
+            }
         };
         let clear_dynamic = match &volumes.data {
-            VoxelData::Paper {
-                albedo,
-                normal,
-                emission,
-                flag: Some(flag),
-            } => {
-                let table = [Some(albedo), Some(normal), emission.as_ref()]
-                    .into_iter()
-                    .flatten()
-                    .fold(
-                        Bindings::new().addresses("PaperWords", &volumes.words[0]),
-                        |t, b| t.reaches(b, Usage::ReadWrite),
-                    )
-                    .reaches(flag, Usage::Read);
+            VoxelData::Paper(p) if p.dynamic => {
+                let table =
+                    p.bind(Bindings::new(), Usage::Write)
+                        .image("paper_flag", &p.flag, Usage::Read);
                 Some(Pass::compute(ctx, "clear_dynamic.comp", &[], table, 4)?)
             }
             _ => None,
@@ -112,15 +109,29 @@ impl Voxelizer {
     ) {
         let d = &ctx.device;
         let n = volumes.grid.resolution;
-        match (dynamic, &self.clear_dynamic) {
-            (true, Some(p)) => {
+        match (dynamic, &self.clear_dynamic, &volumes.data) {
+            (true, Some(p), VoxelData::Paper(v)) => {
                 p.declare(g.pass(name), 0).record(|cmd| unsafe {
                     p.bind(d, cmd, &[], 0);
-                    let voxels = n * n * n;
-                    p.pipeline.push(d, cmd, &voxels.to_le_bytes());
-                    // In rows: 65535 groups is all a dimension must allow (162^3 voxels).
-                    let groups = voxels.div_ceil(64);
-                    d.cmd_dispatch(cmd, groups.min(4096), groups.div_ceil(4096), 1);
+                    p.pipeline.push(d, cmd, &(v.emissive as u32).to_le_bytes());
+                    let groups = n.div_ceil(4);
+                    d.cmd_dispatch(cmd, groups, groups, groups);
+                });
+            }
+            (false, _, VoxelData::Paper(v)) => {
+                // The static pass starts from empty volumes (and no static flags).
+                let images = v.images();
+                let mut pass = g.pass(name);
+                for &i in &images {
+                    pass = pass.image(i, Access::TransferWrite);
+                }
+                pass.record(|cmd| unsafe {
+                    let zero = vk::ClearColorValue { uint32: [0; 4] };
+                    for i in &images {
+                        let range = [i.full_range()];
+                        let layout = vk::ImageLayout::TRANSFER_DST_OPTIMAL;
+                        d.cmd_clear_color_image(cmd, i.raw, layout, &zero, &range);
+                    }
                 });
             }
             _ => {
@@ -144,8 +155,15 @@ impl Voxelizer {
         }
     }
 
-    /// Voxelizes the static (or, with `dynamic`, the dynamic) geometry. `draw` binds the scene
+    /// Voxelizes the static (or, with `dynamic`, the dynamic) geometry. `draws` binds the scene
     /// and material sets and draws the instances of that kind with the given flags.
+    ///
+    /// The default's draws add into buffers reached by address, one rendering scope for all.
+    /// The paper's average into storage images, and each draw is a command of its own with a
+    /// barrier after it: synchronization validation sees every image write, and it cannot
+    /// tell compare-and-swap atomics (which need no order among draws) from plain writes, so
+    /// it asks for an order between commands that write the same texels. Its textures are
+    /// bound per material, which rules out one multi-draw call (docs/porting.md).
     #[allow(clippy::too_many_arguments)]
     pub fn record_voxelize(
         &self,
@@ -155,7 +173,7 @@ impl Voxelizer {
         geometry: (&Buffer, &Buffer),
         dynamic: bool,
         name: &str,
-        draw: &dyn Fn(vk::CommandBuffer, &Pipeline, u32),
+        draws: VoxelDraws,
     ) {
         let d = &ctx.device;
         let n = volumes.grid.resolution;
@@ -164,7 +182,12 @@ impl Voxelizer {
             .declare(g.pass(name), dynamic as usize)
             .buffer(geometry.0, Access::VertexBuffer)
             .buffer(geometry.1, Access::IndexBuffer);
-        pass.record(|cmd| unsafe {
+        let (steps, per_step) = match &volumes.data {
+            VoxelData::Paper(_) => (draws.count, 1),
+            VoxelData::Sums { .. } => (1, draws.count),
+        };
+        let flags = if dynamic { 0 } else { STATIC_PASS };
+        pass.record_steps(steps, |cmd, step| unsafe {
             let info = vk::RenderingInfo::default()
                 .render_area(area(n, n))
                 .layer_count(1);
@@ -184,11 +207,8 @@ impl Voxelizer {
             );
             d.cmd_set_scissor(cmd, 0, &[area(n, n)]);
             self.pass.bind(d, cmd, &[], dynamic as usize);
-            draw(
-                cmd,
-                &self.pass.pipeline,
-                if dynamic { 0 } else { STATIC_PASS },
-            );
+            let first = step * per_step;
+            (draws.draw)(cmd, &self.pass.pipeline, flags, first..first + per_step);
             d.cmd_end_rendering(cmd);
         });
     }

@@ -72,7 +72,8 @@ impl GBufferPass {
                 d.cmd_begin_rendering(cmd, &info);
                 set_viewport(ctx, cmd, w, h);
                 let mirrored = |i| scene.instances.mirrored(i);
-                scene.draw(d, cmd, &self.pass.pipeline, mirrored, |_| true);
+                let all = 0..scene.instances.count();
+                scene.draw(d, cmd, &self.pass.pipeline, mirrored, all);
                 d.cmd_end_rendering(cmd);
             }
         });

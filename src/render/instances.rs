@@ -87,6 +87,18 @@ impl Instances {
         }
     }
 
+    /// How many instances the scene has.
+    pub fn count(&self) -> usize {
+        self.draws.len()
+    }
+
+    /// The instances voxelized with the dynamic geometry (or, with `false`, the static ones).
+    pub fn of_kind(&self, dynamic: bool) -> Vec<usize> {
+        (0..self.count())
+            .filter(|&i| self.dynamic[i] == dynamic)
+            .collect()
+    }
+
     pub fn any_dynamic(&self) -> bool {
         self.dynamic.iter().any(|&d| d)
     }
@@ -130,8 +142,8 @@ impl SceneDraw<'_> {
             .buffer(&self.gpu.indices, Access::IndexBuffer)
     }
 
-    /// Draws the instances `include` accepts with `pipeline`, the scene set at set 0 and each
-    /// one's material set at set 1; `extra` is each draw's last push constant.
+    /// Draws the instances `which` lists, in order, with `pipeline`, the scene set at set 0 and
+    /// each one's material set at set 1; `extra` is each draw's last push constant.
     ///
     /// # Safety
     /// `cmd` is recording inside a rendering scope that `pipeline` fits.
@@ -141,7 +153,7 @@ impl SceneDraw<'_> {
         cmd: vk::CommandBuffer,
         pipeline: &Pipeline,
         extra: impl Fn(usize) -> u32,
-        include: impl Fn(usize) -> bool,
+        which: impl IntoIterator<Item = usize>,
     ) {
         let (instances, gpu) = (self.instances, self.gpu);
         pipeline.bind(d, cmd);
@@ -152,10 +164,8 @@ impl SceneDraw<'_> {
         d.cmd_bind_vertex_buffers(cmd, 0, &[gpu.vertices.raw], &[0]);
         d.cmd_bind_index_buffer(cmd, gpu.indices.raw, 0, vk::IndexType::UINT32);
         let mut bound = u32::MAX;
-        for (i, &(first, count, material)) in instances.draws.iter().enumerate() {
-            if !include(i) {
-                continue;
-            }
+        for i in which {
+            let (first, count, material) = instances.draws[i];
             if material != bound {
                 let set = self.sets.materials.sets[material as usize];
                 pipeline.bind_sets(d, cmd, 1, &[set]);

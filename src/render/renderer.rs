@@ -14,7 +14,7 @@ use super::scene_set::SceneBindings;
 use super::shadow_maps::{ShadowLayout, ShadowMaps};
 use crate::gi::{
     Dirty, FrameImages, Gi, GiInputs, GiSettings, ListFit, ShadowMapsIn, StepInputs, TraceFrame,
-    TraceMode,
+    TraceMode, VoxelDraws,
 };
 use crate::scene::{Aabb, Camera, Light, Scene};
 use crate::vk::{
@@ -22,6 +22,7 @@ use crate::vk::{
     VkResult,
 };
 use glam::{Mat4, Vec4};
+use std::ops::Range;
 use std::sync::Arc;
 
 /// What the image shows.
@@ -699,22 +700,29 @@ impl Renderer {
             return;
         };
         let scene = self.scene();
-        let draw = |dynamic: bool| {
-            let scene = &scene;
-            move |cmd: vk::CommandBuffer, p: &Pipeline, flags: u32| unsafe {
+        let kinds = [false, true].map(|dynamic| self.instances.of_kind(dynamic));
+        let draw = |list: &[usize]| {
+            let (scene, list) = (&scene, list.to_vec());
+            move |cmd: vk::CommandBuffer, p: &Pipeline, flags: u32, range: Range<usize>| unsafe {
                 let extra = |i: usize| {
                     let light = self.area_light_of[i].map_or(0, |_| crate::gi::EMITTER_LIGHT);
                     self.instances.mirrored(i) | flags | light
                 };
-                let include = |i: usize| self.instances.dynamic[i] == dynamic;
-                scene.draw(&self.ctx.device, cmd, p, extra, include)
+                scene.draw(&self.ctx.device, cmd, p, extra, list[range].iter().copied())
             }
         };
+        let (draw_static, draw_dynamic) = (draw(&kinds[0]), draw(&kinds[1]));
         let inputs = StepInputs {
             geometry: (&self.gpu.vertices, &self.gpu.indices),
             scene_set: self.sets.scene_set(),
-            draw_static: &draw(false),
-            draw_dynamic: &draw(true),
+            draw_static: VoxelDraws {
+                count: kinds[0].len(),
+                draw: &draw_static,
+            },
+            draw_dynamic: VoxelDraws {
+                count: kinds[1].len(),
+                draw: &draw_dynamic,
+            },
         };
         gi.record_step(&self.ctx, g, step, &inputs);
     }

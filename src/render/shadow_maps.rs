@@ -146,7 +146,8 @@ impl ShadowMaps {
                 unsafe {
                     d.cmd_begin_rendering(cmd, &info);
                     set_viewport(ctx, cmd, res, res);
-                    scene.draw(d, cmd, &self.pass.pipeline, |_| view, |i| !hides(i, view));
+                    let shown = (0..scene.instances.count()).filter(|&i| !hides(i, view));
+                    scene.draw(d, cmd, &self.pass.pipeline, |_| view, shown);
                     d.cmd_end_rendering(cmd);
                 }
             }

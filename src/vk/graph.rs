@@ -404,46 +404,23 @@ impl<'r> PassBuilder<'_, '_, 'r> {
     }
 
     pub fn record<R>(self, body: impl FnOnce(vk::CommandBuffer) -> R) -> R {
+        let mut body = Some(body);
+        let mut r = None;
+        self.record_steps(1, |cmd, _| r = body.take().map(|b| b(cmd)));
+        r.expect("one step ran")
+    }
+
+    /// A pass of `steps` commands that each touch its resources as declared, with the
+    /// barriers those accesses need between one step and the next (a write after a write: the
+    /// paper's voxelization, whose draws average into the same images). The test hook omits
+    /// them all by the pass's name, or only those between steps by "NAME between steps".
+    pub fn record_steps(self, steps: usize, mut body: impl FnMut(vk::CommandBuffer, usize)) {
         let g = self.graph;
         let device = &g.ctx.device;
         let cmd = g.cmd;
-        let mut image_barriers = Vec::new();
-        let mut buffer_barriers = Vec::new();
-        for (res, access) in &self.uses {
-            let st = g.states.get(res.raw());
-            match *res {
-                Tracked::Image(raw, range) => {
-                    if let Some(b) = derive(st, *access, true) {
-                        image_barriers.push(
-                            vk::ImageMemoryBarrier2::default()
-                                .src_stage_mask(b.src_stage)
-                                .src_access_mask(b.src_access)
-                                .dst_stage_mask(b.dst_stage)
-                                .dst_access_mask(b.dst_access)
-                                .old_layout(b.old_layout)
-                                .new_layout(b.new_layout)
-                                .image(raw)
-                                .subresource_range(range),
-                        );
-                    }
-                }
-                Tracked::Buffer(raw) => {
-                    if let Some(b) = derive(st, *access, false) {
-                        buffer_barriers.push(
-                            vk::BufferMemoryBarrier2::default()
-                                .src_stage_mask(b.src_stage)
-                                .src_access_mask(b.src_access)
-                                .dst_stage_mask(b.dst_stage)
-                                .dst_access_mask(b.dst_access)
-                                .buffer(raw)
-                                .offset(0)
-                                .size(vk::WHOLE_SIZE),
-                        );
-                    }
-                }
-            }
-        }
         let omit = g.omit_barriers_of.as_deref() == Some(self.name);
+        let between = format!("{} between steps", self.name);
+        let omit_between = omit || g.omit_barriers_of.as_deref() == Some(between.as_str());
         *g.ctx.stats.recording.lock().unwrap() = Some(self.name.to_string());
         let label = CString::new(self.name).unwrap_or_default();
         let labelled = self
@@ -453,26 +430,25 @@ impl<'r> PassBuilder<'_, '_, 'r> {
         if self.is_pass {
             g.labels.push(self.name.to_string());
         }
-        unsafe {
-            if let Some(dd) = labelled {
+        if let Some(dd) = labelled {
+            unsafe {
                 dd.cmd_begin_debug_utils_label(
                     cmd,
                     &vk::DebugUtilsLabelEXT::default().label_name(&label),
-                );
-            }
-            let any = !(image_barriers.is_empty() && buffer_barriers.is_empty());
-            if any && !omit {
-                let dep = vk::DependencyInfo::default()
-                    .image_memory_barriers(&image_barriers)
-                    .buffer_memory_barriers(&buffer_barriers);
-                device.cmd_pipeline_barrier2(cmd, &dep);
-            }
+                )
+            };
         }
+        emit_barriers(g, &self.uses, omit);
         let scope = match (self.is_pass, g.timer.as_mut()) {
             (true, Some(t)) => Some(t.begin(device, cmd, self.name)),
             _ => None,
         };
-        let r = body(cmd);
+        for step in 0..steps {
+            if step > 0 {
+                emit_barriers(g, &self.uses, omit_between);
+            }
+            body(cmd, step);
+        }
         if let (Some(t), Some(scope)) = (g.timer.as_mut(), scope) {
             // Timing only: wait for this pass's work before its end timestamp, so that a pass's
             // time is its own (lavapipe otherwise finishes compute work at the next barrier,
@@ -492,8 +468,55 @@ impl<'r> PassBuilder<'_, '_, 'r> {
             unsafe { dd.cmd_end_debug_utils_label(cmd) };
         }
         *g.ctx.stats.recording.lock().unwrap() = None;
-        r
     }
+}
+
+/// Derives the barriers the accesses need from the tracked states, and records them (unless
+/// `omit`: the test hook; the states move on all the same).
+fn emit_barriers(g: &mut Graph, uses: &[(Tracked, Access)], omit: bool) {
+    let mut image_barriers = Vec::new();
+    let mut buffer_barriers = Vec::new();
+    for (res, access) in uses {
+        let st = g.states.get(res.raw());
+        match *res {
+            Tracked::Image(raw, range) => {
+                if let Some(b) = derive(st, *access, true) {
+                    image_barriers.push(
+                        vk::ImageMemoryBarrier2::default()
+                            .src_stage_mask(b.src_stage)
+                            .src_access_mask(b.src_access)
+                            .dst_stage_mask(b.dst_stage)
+                            .dst_access_mask(b.dst_access)
+                            .old_layout(b.old_layout)
+                            .new_layout(b.new_layout)
+                            .image(raw)
+                            .subresource_range(range),
+                    );
+                }
+            }
+            Tracked::Buffer(raw) => {
+                if let Some(b) = derive(st, *access, false) {
+                    buffer_barriers.push(
+                        vk::BufferMemoryBarrier2::default()
+                            .src_stage_mask(b.src_stage)
+                            .src_access_mask(b.src_access)
+                            .dst_stage_mask(b.dst_stage)
+                            .dst_access_mask(b.dst_access)
+                            .buffer(raw)
+                            .offset(0)
+                            .size(vk::WHOLE_SIZE),
+                    );
+                }
+            }
+        }
+    }
+    if omit || (image_barriers.is_empty() && buffer_barriers.is_empty()) {
+        return;
+    }
+    let dep = vk::DependencyInfo::default()
+        .image_memory_barriers(&image_barriers)
+        .buffer_memory_barriers(&buffer_barriers);
+    unsafe { g.ctx.device.cmd_pipeline_barrier2(g.cmd, &dep) };
 }
 
 #[cfg(test)]

@@ -288,7 +288,16 @@ impl Image {
                 base_array_layer: base_layer,
                 layer_count: layers,
             });
-        unsafe { self.ctx.device.create_image_view(&info, None) }.check("vkCreateImageView")
+        let view =
+            unsafe { self.ctx.device.create_image_view(&info, None) }.check("vkCreateImageView")?;
+        // Validation messages name the view a shader accessed.
+        let part = match (layers, levels) {
+            (1, 1) if self.desc.array_layers > 1 => format!(" layer {base_layer}"),
+            (_, 1) if self.desc.mip_levels > 1 => format!(" level {base_level}"),
+            _ => String::new(),
+        };
+        self.ctx.set_name(view, &format!("{}{part}", self.name));
+        Ok(view)
     }
 
     /// A view of one mip level (the whole view for images without level views).
