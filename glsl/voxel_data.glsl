@@ -5,8 +5,6 @@
 #ifndef VOXEL_DATA_GLSL
 #define VOXEL_DATA_GLSL
 
-#include "atomic_average.glsl"
-
 struct Voxel {
     bool filled;
     vec3 albedo;
@@ -19,26 +17,27 @@ struct Voxel {
 };
 
 #ifdef PAPER
-// The paper's volumes (voxelize.frag wrote them; the original reads them through RGBA8 views).
-layout(set = VOXEL_SET, binding = 0, r32ui) readonly uniform uimage3D paper_albedo;
-layout(set = VOXEL_SET, binding = 1, r32ui) readonly uniform uimage3D paper_normal;
-layout(set = VOXEL_SET, binding = 2, r32ui) readonly uniform uimage3D paper_emission;
+// The paper's volumes as RGBA8 texels, as the original reads them (voxelize.frag wrote them
+// through r32ui views; alpha is the 8-bit count over 255).
+layout(set = VOXEL_SET, binding = 0, rgba8) readonly uniform image3D paper_albedo;
+layout(set = VOXEL_SET, binding = 1, rgba8) readonly uniform image3D paper_normal;
+layout(set = VOXEL_SET, binding = 2, rgba8) readonly uniform image3D paper_emission;
 
 bool voxel_filled(ivec3 c) {
-    return (imageLoad(paper_albedo, c).r >> 24u) != 0u;
+    return imageLoad(paper_albedo, c).a > 0.0;
 }
 
 Voxel load_voxel(ivec3 c) {
     Voxel v;
-    vec4 a = unpack_rgba8(imageLoad(paper_albedo, c).r);
+    vec4 a = imageLoad(paper_albedo, c);
     v.filled = a.a > 0.0;
-    v.albedo = a.rgb / 255.0;
-    vec3 n = unpack_rgba8(imageLoad(paper_normal, c).r).rgb / 255.0 * 2.0 - 1.0;
+    v.albedo = a.rgb;
+    vec3 n = imageLoad(paper_normal, c).rgb * 2.0 - 1.0;
     v.agreement = length(n);
     v.normal = v.agreement > 0.0 ? n / v.agreement : vec3(0.0);
     v.axis_weights = v.normal * v.normal;
     v.emission = (frame.grid_info.w & FLAG_EMISSIVE) != 0u
-        ? unpack_rgba8(imageLoad(paper_emission, c).r).rgb / 255.0 : vec3(0.0);
+        ? imageLoad(paper_emission, c).rgb : vec3(0.0);
     v.offset = vec3(0.0);
     return v;
 }

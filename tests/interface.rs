@@ -79,16 +79,17 @@ fn a_table_that_disagrees_with_its_shader_is_caught() {
     let ctx = context();
     let stats = ctx.stats.clone();
     {
-        let words = vk::Format::R32_UINT;
-        let albedo = volume(&ctx, "albedo", words);
-        let normal = volume(&ctx, "normal", words);
-        let emission = volume(&ctx, "emission", words);
+        let texels = vk::Format::R8G8B8A8_UNORM;
+        let albedo = volume(&ctx, "albedo", texels);
+        let normal = volume(&ctx, "normal", texels);
+        let emission = volume(&ctx, "emission", texels);
         let flag = volume(&ctx, "flag", vk::Format::R8_UNORM);
         let buffer = words_buffer(&ctx);
-        // clear_dynamic.comp writes the paper's three averages and reads its flags.
+        // clear_dynamic.comp reads and writes the paper's albedo, writes its normals and
+        // emission, and reads its flags.
         let three = || {
             Bindings::new()
-                .image("paper_albedo", &albedo, Usage::Write)
+                .image("paper_albedo", &albedo, Usage::ReadWrite)
                 .image("paper_normal", &normal, Usage::Write)
                 .image("paper_emission", &emission, Usage::Write)
         };

@@ -177,10 +177,12 @@ fn paper_frame(omit: Option<&str>) -> Vec<String> {
     stats.messages()
 }
 
-/// Whether a message reports a hazard of `kind` on the image named `image`.
+/// Whether a message reports a hazard of `kind` on the image named `image` (through any of
+/// its views: "[voxel albedo]", "[voxel albedo as R8G8B8A8_UNORM]").
 fn hazard_on(msgs: &[String], kind: &str, image: &str) -> bool {
-    msgs.iter()
-        .any(|m| m.contains(kind) && m.contains(&format!("[{image}]")))
+    let named =
+        |m: &String| m.contains(&format!("[{image}]")) || m.contains(&format!("[{image} as "));
+    msgs.iter().any(|m| m.contains(kind) && named(m))
 }
 
 #[test]

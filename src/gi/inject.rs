@@ -10,7 +10,7 @@ use std::sync::Arc;
 /// they point to, or --paper's images.
 pub fn read_voxel_data(table: Bindings, volumes: &Volumes) -> Bindings {
     let table = match &volumes.data {
-        VoxelData::Paper(p) => return p.bind(table, Usage::Read),
+        VoxelData::Paper(p) => return p.bind_texels(table, [Usage::Read; 3]),
         VoxelData::Sums { .. } => table
             .addresses("StaticWords", &volumes.words[0])
             .addresses("DynamicWords", &volumes.words[1]),

@@ -60,10 +60,10 @@ pub enum VoxelData {
     Paper(PaperVolumes),
 }
 
-/// The original's voxel volumes: RGBA8 moving averages in r32ui 3D storage images (the bits of
-/// an RGBA8 texel, averaged by imageAtomicCompSwap), and its R8 static flags. Emission and
-/// flags are one texel, never read, where the scene emits nothing or nothing moves: the
-/// shaders' bindings stay.
+/// The original's voxel volumes: RGBA8 moving averages in 3D storage images, written through
+/// r32ui views (the bits of an RGBA8 texel, averaged by imageAtomicCompSwap) and read through
+/// RGBA8 views, and its R8 static flags. Emission and flags are one texel, never read, where
+/// the scene emits nothing or nothing moves: the shaders' bindings stay.
 pub struct PaperVolumes {
     pub albedo: Image,
     pub normal: Image,
@@ -86,12 +86,26 @@ impl PaperVolumes {
         v
     }
 
-    /// Binds the averages as glsl/voxel_data.glsl and voxelize.frag name them, used `usage`.
-    pub fn bind(&self, table: Bindings, usage: Usage) -> Bindings {
+    /// Binds the averages' r32ui views as voxelize.frag names them (its atomics).
+    pub fn bind_words(&self, table: Bindings, usage: Usage) -> Bindings {
         table
             .image("paper_albedo", &self.albedo, usage)
             .image("paper_normal", &self.normal, usage)
             .image("paper_emission", &self.emission, usage)
+    }
+
+    /// Binds the averages' RGBA8 views as glsl/voxel_data.glsl and clear_dynamic.comp name
+    /// them (the original's later passes read them as RGBA8).
+    pub fn bind_texels(&self, table: Bindings, usage: [Usage; 3]) -> Bindings {
+        let rgba8 = |i: &Image| {
+            i.format_view(PAPER_TEXELS)
+                .expect("made with an RGBA8 view")
+        };
+        let [a, n, e] = usage;
+        table
+            .image_view("paper_albedo", &self.albedo, rgba8(&self.albedo), a)
+            .image_view("paper_normal", &self.normal, rgba8(&self.normal), n)
+            .image_view("paper_emission", &self.emission, rgba8(&self.emission), e)
     }
 }
 
@@ -482,6 +496,11 @@ fn check_grid_fits(ctx: &Context, grid: VoxelGrid, settings: &GiSettings) -> VkR
     Ok(())
 }
 
+/// The paper's averages are written as words (atomics need a one-channel format) and read as
+/// the RGBA8 texels those words are.
+const PAPER_WORDS: vk::Format = vk::Format::R32_UINT;
+const PAPER_TEXELS: vk::Format = vk::Format::R8G8B8A8_UNORM;
+
 /// The original's volumes: r32ui averages and R8 flags, one texel where unused.
 fn paper_volumes(
     ctx: &Arc<Context>,
@@ -494,7 +513,7 @@ fn paper_volumes(
     let usage = vk::ImageUsageFlags::STORAGE
         | vk::ImageUsageFlags::TRANSFER_DST
         | vk::ImageUsageFlags::TRANSFER_SRC;
-    let mut volume = |name: &str, format: vk::Format, texel: u64, used: bool| {
+    let mut volume = |name: &str, format: vk::Format, texel: u64, used: bool| -> VkResult<Image> {
         let side = if used { n } else { 1 };
         if used {
             info.push(VolumeInfo {
@@ -507,13 +526,20 @@ fn paper_volumes(
         } else {
             format!("{name} (unused)")
         };
-        Image::new(ctx, &name, ImageDesc::d3(format, side, usage))
+        let mut desc = ImageDesc::d3(format, side, usage);
+        if format == PAPER_WORDS {
+            desc.flags = vk::ImageCreateFlags::MUTABLE_FORMAT;
+        }
+        let mut image = Image::new(ctx, &name, desc)?;
+        if format == PAPER_WORDS {
+            image.view_as(PAPER_TEXELS)?;
+        }
+        Ok(image)
     };
-    let words = vk::Format::R32_UINT;
     Ok(PaperVolumes {
-        albedo: volume("voxel albedo", words, 4, true)?,
-        normal: volume("voxel normal", words, 4, true)?,
-        emission: volume("voxel emission", words, 4, emissive)?,
+        albedo: volume("voxel albedo", PAPER_WORDS, 4, true)?,
+        normal: volume("voxel normal", PAPER_WORDS, 4, true)?,
+        emission: volume("voxel emission", PAPER_WORDS, 4, emissive)?,
         flag: volume("static flags", vk::Format::R8_UNORM, 1, dynamic)?,
         emissive,
         dynamic,

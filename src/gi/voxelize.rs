@@ -39,7 +39,7 @@ impl Voxelizer {
         // all. The paper's passes bind its images (and the flags: the static pass writes them,
         // the dynamic one reads them).
         let target = |dynamic: bool| match &volumes.data {
-            VoxelData::Paper(p) => p.bind(Bindings::new(), Usage::ReadWrite).image(
+            VoxelData::Paper(p) => p.bind_words(Bindings::new(), Usage::ReadWrite).image(
                 "paper_flag",
                 &p.flag,
                 Usage::ReadWrite,
@@ -59,9 +59,12 @@ impl Voxelizer {
         };
         let clear_dynamic = match &volumes.data {
             VoxelData::Paper(p) if p.dynamic => {
-                let table =
-                    p.bind(Bindings::new(), Usage::Write)
-                        .image("paper_flag", &p.flag, Usage::Read);
+                let table = p
+                    .bind_texels(
+                        Bindings::new(),
+                        [Usage::ReadWrite, Usage::Write, Usage::Write],
+                    )
+                    .image("paper_flag", &p.flag, Usage::Read);
                 Some(Pass::compute(ctx, "clear_dynamic.comp", &[], table, 4)?)
             }
             _ => None,
@@ -114,7 +117,7 @@ impl Voxelizer {
                 p.declare(g.pass(name), 0).record(|cmd| unsafe {
                     p.bind(d, cmd, &[], 0);
                     p.pipeline.push(d, cmd, &(v.emissive as u32).to_le_bytes());
-                    let groups = n.div_ceil(4);
+                    let groups = n.div_ceil(8);
                     d.cmd_dispatch(cmd, groups, groups, groups);
                 });
             }

@@ -197,6 +197,8 @@ pub struct Image {
     pub layer_views: Vec<vk::ImageView>,
     /// One view per mip level of a mipmapped 3D image (storage writes take a single level).
     pub level_views: Vec<vk::ImageView>,
+    /// Views of every level and layer in other formats (an image made MUTABLE_FORMAT).
+    pub format_views: Vec<(vk::Format, vk::ImageView)>,
     allocation: Option<Allocation>,
     pub name: String,
 }
@@ -237,6 +239,7 @@ impl Image {
             view: vk::ImageView::null(),
             layer_views: Vec::new(),
             level_views: Vec::new(),
+            format_views: Vec::new(),
             allocation: None,
             name: name.into(),
         };
@@ -253,25 +256,60 @@ impl Image {
             (_, false) => vk::ImageViewType::TYPE_2D,
             (_, true) => vk::ImageViewType::TYPE_2D_ARRAY,
         };
-        image.view = image.make_view(view_type, 0, desc.array_layers, 0, desc.mip_levels)?;
+        image.view = image.make_view(
+            view_type,
+            desc.format,
+            0,
+            desc.array_layers,
+            0,
+            desc.mip_levels,
+        )?;
         if desc.image_type == vk::ImageType::TYPE_3D && desc.mip_levels > 1 {
             for level in 0..desc.mip_levels {
-                let v = image.make_view(view_type, 0, 1, level, 1)?;
+                let v = image.make_view(view_type, desc.format, 0, 1, level, 1)?;
                 image.level_views.push(v);
             }
         }
         if desc.array_layers > 1 {
             for layer in 0..desc.array_layers {
-                let v = image.make_view(vk::ImageViewType::TYPE_2D, layer, 1, 0, 1)?;
+                let v = image.make_view(vk::ImageViewType::TYPE_2D, desc.format, layer, 1, 0, 1)?;
                 image.layer_views.push(v);
             }
         }
         Ok(image)
     }
 
+    /// A view of the whole image in another format of its class (the image made with
+    /// MUTABLE_FORMAT), kept with the image; a second call for one format returns the first
+    /// view.
+    pub fn view_as(&mut self, format: vk::Format) -> VkResult<vk::ImageView> {
+        if let Some(&(_, v)) = self.format_views.iter().find(|(f, _)| *f == format) {
+            return Ok(v);
+        }
+        let view_type = match (self.desc.image_type, self.desc.array_view) {
+            (vk::ImageType::TYPE_3D, _) => vk::ImageViewType::TYPE_3D,
+            (_, false) => vk::ImageViewType::TYPE_2D,
+            (_, true) => vk::ImageViewType::TYPE_2D_ARRAY,
+        };
+        let (layers, levels) = (self.desc.array_layers, self.desc.mip_levels);
+        let v = self.make_view(view_type, format, 0, layers, 0, levels)?;
+        self.format_views.push((format, v));
+        Ok(v)
+    }
+
+    /// The view of another format made by `view_as`.
+    pub fn format_view(&self, format: vk::Format) -> Option<vk::ImageView> {
+        self.format_views
+            .iter()
+            .find(|(f, _)| *f == format)
+            .map(|&(_, v)| v)
+    }
+
+    #[allow(clippy::too_many_arguments)]
     fn make_view(
         &self,
         view_type: vk::ImageViewType,
+        format: vk::Format,
         base_layer: u32,
         layers: u32,
         base_level: u32,
@@ -280,7 +318,7 @@ impl Image {
         let info = vk::ImageViewCreateInfo::default()
             .image(self.raw)
             .view_type(view_type)
-            .format(self.desc.format)
+            .format(format)
             .subresource_range(vk::ImageSubresourceRange {
                 aspect_mask: aspect_of(self.desc.format),
                 base_mip_level: base_level,
@@ -291,11 +329,14 @@ impl Image {
         let view =
             unsafe { self.ctx.device.create_image_view(&info, None) }.check("vkCreateImageView")?;
         // Validation messages name the view a shader accessed.
-        let part = match (layers, levels) {
+        let mut part = match (layers, levels) {
             (1, 1) if self.desc.array_layers > 1 => format!(" layer {base_layer}"),
             (_, 1) if self.desc.mip_levels > 1 => format!(" level {base_level}"),
             _ => String::new(),
         };
+        if format != self.desc.format {
+            part += &format!(" as {format:?}");
+        }
         self.ctx.set_name(view, &format!("{}{part}", self.name));
         Ok(view)
     }
@@ -341,6 +382,9 @@ impl Image {
 impl Drop for Image {
     fn drop(&mut self) {
         unsafe {
+            for (_, v) in self.format_views.drain(..).rev() {
+                self.ctx.device.destroy_image_view(v, None);
+            }
             for v in self.level_views.drain(..).rev() {
                 self.ctx.device.destroy_image_view(v, None);
             }
