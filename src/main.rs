@@ -270,6 +270,38 @@ struct SunOpt {
     sun: Option<scene::Light>,
 }
 
+/// Light from beyond the scene (CONVENTIONS.md, "Environment").
+#[derive(Args, Clone)]
+struct EnvOpts {
+    /// Light from every direction in which a ray leaves the scene: a uniform radiance R,G,B
+    /// (W/sr/m^2), or an equirectangular .hdr or .exr image of linear radiance (row 0 looks
+    /// up, its centre along -Z); background pixels show it
+    #[arg(long, value_name = "R,G,B|FILE")]
+    env: Option<String>,
+    /// Multiplies the environment's radiance
+    #[arg(long, value_name = "S", default_value_t = 1.0, requires = "env")]
+    env_strength: f32,
+    /// Turns the environment about +Y by DEG degrees, counter-clockwise seen from above
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 0.0,
+        requires = "env",
+        allow_hyphen_values = true
+    )]
+    env_rotate: f32,
+}
+
+impl EnvOpts {
+    fn environment(&self) -> Result<Option<scene::Environment>> {
+        self.env
+            .as_deref()
+            .map(|spec| scene::Environment::from_spec(spec, self.env_strength, self.env_rotate))
+            .transpose()
+            .map_err(|e| anyhow!(e))
+    }
+}
+
 #[derive(Args, Clone)]
 struct SpinOpts {
     /// Turn the node named NODE about its vertical axis (voxelized every frame, apart from the
@@ -350,6 +382,8 @@ struct ShowOpts {
     #[command(flatten)]
     sun: SunOpt,
     #[command(flatten)]
+    env: EnvOpts,
+    #[command(flatten)]
     spin: SpinOpts,
     #[command(flatten)]
     camera: CameraOpts,
@@ -361,7 +395,7 @@ impl ShowOpts {
     fn load(&self) -> Result<(RenderSettings, Scene, scene::Motion)> {
         let path = self.scene.clone().unwrap_or_else(default_scene);
         let settings = self.render.settings()?;
-        let mut scene = scene_with_sun(&path, &self.sun)?;
+        let mut scene = scene_with_sun(&path, &self.sun, &self.env)?;
         self.camera.apply(&mut scene)?;
         warn_if_unlit(&scene, &path);
         let motion = motion(&self.spin, &scene)?;
@@ -426,6 +460,8 @@ struct InfoCmd {
     #[command(flatten)]
     render: RenderOpts,
     #[command(flatten)]
+    env: EnvOpts,
+    #[command(flatten)]
     camera: CameraOpts,
     #[command(flatten)]
     device: DeviceOpts,
@@ -448,6 +484,8 @@ struct ReferenceCmd {
     seed: u64,
     #[command(flatten)]
     sun: SunOpt,
+    #[command(flatten)]
+    env: EnvOpts,
     #[command(flatten)]
     camera: CameraOpts,
     /// Only the light a tracer with B bounces models (render's --bounces: B reflections of
@@ -599,6 +637,8 @@ struct BenchCmd {
     #[command(flatten)]
     sun: SunOpt,
     #[command(flatten)]
+    env: EnvOpts,
+    #[command(flatten)]
     camera: CameraOpts,
     /// Display exposure of both images for FLIP, in stops
     #[arg(long, value_name = "EV", default_value_t = 0.0)]
@@ -723,7 +763,10 @@ impl RenderOpts {
 
 /// A scene with nothing to light it renders black: say so rather than leave a user guessing.
 fn warn_if_unlit(scene: &Scene, path: &Path) {
-    if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.is_emissive()) {
+    if scene.lights.is_empty()
+        && scene.environment.is_none()
+        && !scene.materials.iter().any(|m| m.is_emissive())
+    {
         log::warn!(
             "{}: the scene has no lights and no emission; the image is black \
              (--sun EL,AZ adds a light)",
@@ -752,10 +795,12 @@ fn motion(spin: &SpinOpts, scene: &Scene) -> Result<scene::Motion> {
     })
 }
 
-/// The scene of a command, with `--sun` added.
-fn scene_with_sun(path: &Path, sun: &SunOpt) -> Result<Scene> {
+/// The scene of a command, with `--sun` and `--env` added.
+fn scene_with_sun(path: &Path, sun: &SunOpt, env: &EnvOpts) -> Result<Scene> {
+    let environment = env.environment()?;
     let mut scene = load_scene(path)?;
     scene.lights.extend(sun.sun.clone());
+    scene.environment = environment;
     Ok(scene)
 }
 
@@ -1074,7 +1119,9 @@ fn info(c: InfoCmd) -> Result<()> {
         [s] => s.clone(),
         _ => bail!("info takes one scene (voxgi help info)"),
     };
+    let environment = c.env.environment()?;
     let mut scene = load_scene(&scene_path)?;
+    scene.environment = environment;
     c.camera.apply(&mut scene)?;
     println!("scene      {}", scene.source.display());
     println!("triangles  {}", scene.triangle_count());
@@ -1090,6 +1137,9 @@ fn info(c: InfoCmd) -> Result<()> {
         scene.materials.iter().filter(|m| m.is_emissive()).count(),
         scene.textures.len()
     );
+    if let Some(e) = &scene.environment {
+        println!("environment {}", e.describe());
+    }
     println!("lights     {}", scene.lights.len());
     for l in &scene.lights {
         println!(
@@ -1239,9 +1289,12 @@ fn reference(c: ReferenceCmd) -> Result<()> {
         ..Default::default()
     };
     let (w, h, spp) = (settings.width, settings.height, settings.spp);
-    let mut scene = scene_with_sun(&scene_path, &c.sun)?;
+    let mut scene = scene_with_sun(&scene_path, &c.sun, &c.env)?;
     c.camera.apply(&mut scene)?;
-    if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.is_emissive()) {
+    if scene.lights.is_empty()
+        && scene.environment.is_none()
+        && !scene.materials.iter().any(|m| m.is_emissive())
+    {
         log::warn!(
             "{}: no lights and no emission; the image is black",
             scene_path.display()
@@ -1345,6 +1398,7 @@ fn bench(c: BenchCmd) -> Result<()> {
         ref_spp: c.ref_spp,
         orbit_deg: c.orbit,
         extra_lights: c.sun.sun.into_iter().collect(),
+        environment: c.env.environment()?,
         exposure: c.exposure,
         accumulate: c.accumulate,
         validate: c.device.validate,

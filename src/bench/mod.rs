@@ -44,6 +44,8 @@ pub struct BenchOptions {
     pub orbit_deg: f32,
     /// Lights added to the scene (the command line's `--sun`), part of the cache key.
     pub extra_lights: Vec<Light>,
+    /// Light from beyond the scene (`--env`).
+    pub environment: Option<crate::scene::Environment>,
     /// Display exposure of both images for FLIP.
     pub exposure: f32,
     /// Frames in the still image's antialiasing mean (RenderSettings::accumulate; 1: off).
@@ -72,6 +74,7 @@ impl Default for BenchOptions {
             ref_spp: 256,
             orbit_deg: 10.0,
             extra_lights: Vec::new(),
+            environment: None,
             exposure: 0.0,
             accumulate: RenderSettings::default().accumulate,
             validate: false,
@@ -291,6 +294,34 @@ fn reference(
         .clone()
         .unwrap_or_else(|| opts.out_dir.join("cache"));
     let mut key = reference_key(scene_bytes, &opts.extra_lights, &settings);
+    // An environment (--env): its own references, by its radiance, texels, strength and turn.
+    if let Some(e) = &opts.environment {
+        let mut h = Fnv::new();
+        h.bytes(&e.strength.to_bits().to_le_bytes())
+            .bytes(&e.rotation.to_bits().to_le_bytes());
+        match &e.source {
+            crate::scene::EnvSource::Uniform(rgb) => {
+                h.bytes(
+                    &rgb.to_array()
+                        .map(f32::to_bits)
+                        .map(u32::to_le_bytes)
+                        .concat(),
+                );
+            }
+            crate::scene::EnvSource::Image(img) => {
+                h.bytes(&[img.width, img.height].map(u32::to_le_bytes).concat());
+                for t in &img.texels {
+                    h.bytes(
+                        &t.to_array()
+                            .map(f32::to_bits)
+                            .map(u32::to_le_bytes)
+                            .concat(),
+                    );
+                }
+            }
+        }
+        key = format!("e{:016x}-{key}", h.0);
+    }
     // A view asked for (--camera, --eye): its own references; without one the keys stay.
     if let Some(v) = &opts.view {
         key = format!(
@@ -583,10 +614,14 @@ pub fn run(opts: &BenchOptions) -> Result<BenchResults, BenchError> {
     // scene::load logs its warnings.
     let mut scene = scene::load(&opts.scene)?;
     scene.lights.extend(opts.extra_lights.iter().cloned());
+    scene.environment = opts.environment.clone();
     if let Some(v) = &opts.view {
         scene.set_view(v).map_err(BenchError::Options)?;
     }
-    if scene.lights.is_empty() && !scene.materials.iter().any(|m| m.is_emissive()) {
+    if scene.lights.is_empty()
+        && scene.environment.is_none()
+        && !scene.materials.iter().any(|m| m.is_emissive())
+    {
         log::warn!(
             "{}: no lights and no emission; every image is black",
             opts.scene.display()

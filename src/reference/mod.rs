@@ -5,18 +5,22 @@
 //! Unidirectional path tracing with next-event estimation: punctual lights are sampled
 //! directly; emissive triangles are sampled by area in proportion to their power and combined
 //! with BRDF sampling by multiple importance sampling (power heuristic). Paths end by Russian
-//! roulette. The background is black. Each pixel is the mean of samples jittered over its
+//! roulette. A path that leaves the scene takes the environment's radiance (black without
+//! one); an environment image is also sampled directly, in proportion to its texels' power,
+//! and combined with BRDF sampling by the power heuristic. Each pixel is the mean of samples jittered over its
 //! footprint; every pixel has its own random stream derived from the seed and its index, so a
 //! seed gives the same image bit for bit whatever the number of threads.
 
 pub mod brdf;
 pub mod bvh;
+pub mod environment;
 pub mod sampling;
 pub mod texture;
 pub mod world;
 
 use crate::output::RadianceImage;
 use crate::scene::Scene;
+use environment::EnvLight;
 use glam::Vec3;
 use rayon::prelude::*;
 use sampling::{power_heuristic, Frame, Pcg32};
@@ -44,6 +48,9 @@ pub struct ReferenceSettings {
     pub rr_depth: u32,
     /// A progress bar on stderr (only drawn where `console::bars_shown`).
     pub progress: bool,
+    /// Next-event estimation of an environment image by its texels' power (off: the
+    /// environment is found by BRDF sampling alone, to measure what this buys).
+    pub env_sampling: bool,
 }
 
 impl Default for ReferenceSettings {
@@ -57,6 +64,7 @@ impl Default for ReferenceSettings {
             bounces: None,
             rr_depth: 3,
             progress: false,
+            env_sampling: true,
         }
     }
 }
@@ -85,6 +93,10 @@ pub fn render_full(scene: &Scene, settings: &ReferenceSettings) -> ReferenceOutp
     let (w, h) = (settings.width.max(1), settings.height.max(1));
     let spp = settings.spp.max(1);
     let world = World::new(scene);
+    let env = scene
+        .environment
+        .as_ref()
+        .map(|e| EnvLight::new(e, settings.env_sampling));
     let camera = CameraRays::new(scene, w, h);
     let setup_seconds = start.elapsed().as_secs_f64();
     let bad = AtomicU64::new(0);
@@ -103,7 +115,7 @@ pub fn render_full(scene: &Scene, settings: &ReferenceSettings) -> ReferenceOutp
                 for _ in 0..spp {
                     let j = rng.next_2d();
                     let d = camera.direction(x as f32 + j.x, y as f32 + j.y);
-                    let l = trace(&world, camera.eye, d, &mut rng, settings);
+                    let l = trace(&world, env.as_ref(), camera.eye, d, &mut rng, settings);
                     if !l.is_finite() {
                         bad.fetch_add(1, Ordering::Relaxed);
                         continue;
@@ -202,7 +214,14 @@ fn offset_origin(p: Vec3, n: Vec3) -> Vec3 {
 }
 
 /// One path from the camera: the radiance it carries back.
-fn trace(world: &World, eye: Vec3, dir: Vec3, rng: &mut Pcg32, s: &ReferenceSettings) -> Vec3 {
+fn trace(
+    world: &World,
+    env: Option<&EnvLight>,
+    eye: Vec3,
+    dir: Vec3,
+    rng: &mut Pcg32,
+    s: &ReferenceSettings,
+) -> Vec3 {
     let mut l = Vec3::ZERO;
     let mut beta = Vec3::ONE;
     let (mut o, mut d) = (eye, dir);
@@ -215,6 +234,16 @@ fn trace(world: &World, eye: Vec3, dir: Vec3, rng: &mut Pcg32, s: &ReferenceSett
     let emitter_depths = s.bounces.unwrap_or(u32::MAX);
     for depth in 0..max_depth.max(1) {
         let Some(hit) = world.intersect(o, d, f32::INFINITY) else {
+            // Left the scene: the environment, weighted against its direct sampling at the
+            // vertex before (which pairs with this escape as an emitter's sample does).
+            if let Some(env) = env {
+                let weight = if bsdf_pdf > 0.0 && env.is_sampled() {
+                    power_heuristic(bsdf_pdf, env.pdf(d))
+                } else {
+                    1.0
+                };
+                l += beta * env.radiance(d) * weight;
+            }
             break;
         };
         let wo = -d;
@@ -283,6 +312,21 @@ fn trace(world: &World, eye: Vec3, dir: Vec3, rng: &mut Pcg32, s: &ReferenceSett
                             let weight = power_heuristic(light_pdf, brdf.pdf(wo_local, wi_local));
                             l += beta * f * wi_local.z * le * weight / light_pdf;
                         }
+                    }
+                }
+            }
+        }
+
+        if let Some(env) = env.filter(|e| e.is_sampled() && depth < emitter_depths) {
+            let u_pick = rng.next_f32();
+            let u = rng.next_2d();
+            if let Some((wi, light_pdf)) = env.sample(u_pick, u) {
+                if surf.ng.dot(wi) > 0.0 && light_pdf > 0.0 {
+                    let wi_local = frame.to_local(wi);
+                    let f = brdf.eval(wo_local, wi_local);
+                    if f != Vec3::ZERO && !world.occluded(origin, wi, f32::INFINITY) {
+                        let weight = power_heuristic(light_pdf, brdf.pdf(wo_local, wi_local));
+                        l += beta * f * wi_local.z * env.radiance(wi) * weight / light_pdf;
                     }
                 }
             }

@@ -170,6 +170,7 @@ fn load_inner(path: &Path) -> Result<Scene, String> {
         origin,
         nodes,
         animations,
+        environment: None,
         warnings,
     })
 }

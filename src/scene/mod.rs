@@ -10,11 +10,13 @@ mod accessor;
 pub mod animation;
 mod base64;
 pub mod builder;
+pub mod environment;
 pub mod fuzz;
 mod geometry;
 mod load;
 mod material;
 pub use animation::{Animation, Motion, Node, Spin, SPIN_DEGREES_PER_SECOND};
+pub use environment::{EnvSource, Environment};
 pub use load::{default_camera, load};
 
 /// Vertical field of view of the CONVENTIONS.md default camera.
@@ -322,6 +324,8 @@ pub struct Scene {
     pub nodes: Vec<Node>,
     /// Node animations (translation, rotation, scale).
     pub animations: Vec<Animation>,
+    /// Light from beyond the scene (none unless asked for: `--env`).
+    pub environment: Option<Environment>,
     pub warnings: Vec<String>,
 }
 

@@ -41,6 +41,7 @@ pub fn empty_scene() -> Scene {
         nodes: vec![],
         animations: vec![],
         cameras: vec![],
+        environment: None,
         warnings: vec![],
     }
 }
