@@ -32,6 +32,8 @@ layout(set = 0, binding = 0, std140) uniform Frame {
                       // radiance x y, so that a very strong light stays within half floats;
                       // z the specular cone's narrowest diameter (voxels), w voxels per
                       // empty-space cell
+    vec4 env;         // the environment (environment.glsl): x strength, yz cosine and sine of
+                      // its turn about +Y, w 1 when there is one
 } frame;
 
 const uint FLAG_DYNAMIC = 1u;        // dynamic accumulators are bound and filled

@@ -7,6 +7,7 @@
 #define CONE_TRACING_GLSL
 
 #include "aniso_mip.glsl"
+#include "environment.glsl"
 
 #if CONE_FULL_RES
 layout(set = CONE_SET, binding = 0) uniform sampler3D radiance_tex;
@@ -253,6 +254,15 @@ Cone trace_cone(vec3 origin, vec3 dir, float tan_half, float t0, float max_dist,
         t += step_len;
     }
     cone.radiance /= frame.tuning.y;  // the volumes' radiance scale
+#ifndef PAPER
+    // Left the grid (the scene) before it was opaque: the environment, over the cone's
+    // aperture, for the part of the cone still open.
+    vec3 end = world_to_grid(origin + dir * t);
+    bool left = any(lessThan(end, vec3(0.0))) || any(greaterThan(end, vec3(1.0)));
+    if (left && has_environment()) {
+        cone.radiance += (1.0 - cone.opacity) * environment_radiance(dir, tan_half);
+    }
+#endif
     return cone;
 }
 

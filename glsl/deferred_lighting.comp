@@ -5,6 +5,7 @@
 #include "common.glsl"
 #include "brdf.glsl"
 #include "lights.glsl"
+#include "environment.glsl"
 
 layout(local_size_x = 8, local_size_y = 8) in;
 
@@ -26,8 +27,15 @@ void main() {
 
     vec4 pos = texelFetch(gb_position, px, 0);
     if (pos.a == 0.0) {
-        // Background: no environment light in the conventions.
-        imageStore(out_radiance, px, vec4(0.0, 0.0, 0.0, 1.0));
+        // Background: the environment along the pixel's ray (black without one). The view
+        // ray of the pixel's centre through the projection: x_view = (ndc.x + proj[2][0]) /
+        // proj[0][0] at z_view = -1, and likewise y (the viewport is flipped: ndc y is up).
+        vec2 ndc = (vec2(px) + 0.5) / vec2(frame.counts.yz) * 2.0 - 1.0;
+        ndc.y = -ndc.y;
+        vec3 ray = vec3((ndc.x + frame.proj[2][0]) / frame.proj[0][0],
+                        (ndc.y + frame.proj[2][1]) / frame.proj[1][1], -1.0);
+        vec3 d = normalize(transpose(mat3(frame.view)) * ray);
+        imageStore(out_radiance, px, vec4(environment_radiance(d, 0.0), 1.0));
         return;
     }
     vec4 normals = texelFetch(gb_normals, px, 0);

@@ -36,6 +36,8 @@ pub struct FrameUniforms {
     pub cones: [Vec4; 16],
     /// levels finer than the cone diameter to sample, unused x3
     pub tuning: Vec4,
+    /// the environment: strength, cosine and sine of its turn, 1 when there is one
+    pub env: Vec4,
 }
 
 #[repr(C)]

@@ -30,6 +30,9 @@ pub struct GpuScene {
     pub texture_samplers: Vec<usize>,
     pub samplers: Vec<Sampler>,
     pub light_views: Vec<LightViews>,
+    /// The environment's image (black, 1x1, without one) and its sampler.
+    pub environment: Image,
+    pub environment_sampler: Sampler,
     pub shadow_view_count: u32,
     /// The scene's punctual lights' views (the area lights' follow them).
     pub punctual_view_count: u32,
@@ -446,14 +449,25 @@ impl GpuScene {
         let light_buffers = LightBuffers::new(ctx, &table)?;
 
         let SceneTextures {
-            textures,
-            regions,
+            mut textures,
+            mut regions,
             texture_samplers,
             samplers,
         } = scene_textures(ctx, scene, &mut |bytes| staging.push(bytes))?;
+        // The environment goes up with the textures.
+        let env_levels = super::environment::levels(scene.environment.as_ref());
+        textures.push(super::environment::image(ctx, &env_levels)?);
+        regions.push(
+            env_levels
+                .iter()
+                .enumerate()
+                .map(|(level, (w, h, data))| mip_copy(staging.push(data), level as u32, *w, *h))
+                .collect(),
+        );
 
         let copies = [(&vertices, vertex_off), (&indices, index_off)];
         staging.upload(ctx, states, &copies, &textures, &regions)?;
+        let environment = textures.pop().expect("the environment was pushed last");
 
         Ok(GpuScene {
             vertices,
@@ -470,6 +484,8 @@ impl GpuScene {
                 .map(|v| v.views.len() as u32)
                 .sum(),
             light_views: table.views,
+            environment,
+            environment_sampler: super::environment::sampler(ctx)?,
         })
     }
 }

@@ -3,6 +3,7 @@
 
 mod accumulate;
 pub mod area_lights;
+pub mod environment;
 mod frame;
 mod gbuffer;
 pub mod gpu;

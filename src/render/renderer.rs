@@ -234,6 +234,8 @@ pub struct Renderer {
     area_light_of: Vec<Option<usize>>,
     /// The scene's bounds (light views are fitted to them).
     bounds: Aabb,
+    /// The environment's frame uniform (src/render/environment.rs).
+    environment: Vec4,
     specular_needed: bool,
     /// Frames since the temporal trace's history began, and the camera of the last one.
     history_frames: u64,
@@ -366,6 +368,7 @@ impl Renderer {
             area_lights,
             area_light_of,
             bounds: scene.bounds,
+            environment: super::environment::uniform(scene.environment.as_ref()),
             specular_needed: scene
                 .materials
                 .iter()
@@ -432,6 +435,7 @@ impl Renderer {
                 super::shadows::soft_shadow_texels(self.settings.area_shadow_resolution) as f32,
                 0.0,
             ),
+            env: self.environment,
             ..Default::default()
         };
         if let Some(gi) = &self.gi {

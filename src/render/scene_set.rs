@@ -32,7 +32,12 @@ impl SceneBindings {
             .uniform("ShadowViews", &gpu.lights.shadow_views)
             .uniform("AreaPolygons", &gpu.lights.area_polygons)
             .uniform("AreaVertices", &gpu.lights.area_vertices)
-            .buffer("LtcTable", &gpu.lights.ltc, Usage::Read);
+            .buffer("LtcTable", &gpu.lights.ltc, Usage::Read)
+            .sampled(
+                "environment_map",
+                &gpu.environment,
+                &gpu.environment_sampler,
+            );
         let scene_set = SharedSet::new(ctx, "scene set", 0, vec![table])?;
         let default_material = [Material::default()];
         let materials = if scene.materials.is_empty() {
