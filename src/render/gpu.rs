@@ -266,7 +266,8 @@ mod tests {
                 cone,
                 trace,
                 cones,
-                tuning
+                tuning,
+                env
             }),
             std::mem::size_of::<FrameUniforms>(),
         );

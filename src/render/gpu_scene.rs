@@ -412,9 +412,14 @@ fn address_mode(w: Wrap) -> vk::SamplerAddressMode {
 }
 
 impl GpuScene {
+    /// `lights`: the scene's and the environment's sun; `environment`: the one the cones see
+    /// (without its sun).
+    #[allow(clippy::too_many_arguments)]
     pub fn upload(
         ctx: &Arc<Context>,
         scene: &Scene,
+        lights: &[Light],
+        environment: Option<&crate::scene::Environment>,
         states: &mut ResourceStates,
         area_lights: &[AreaLight],
         shadow_resolution: ShadowResolution,
@@ -440,7 +445,7 @@ impl GpuScene {
         let (materials, material_stride) = material_buffer(ctx, scene)?;
 
         let table = light_table(
-            &scene.lights,
+            lights,
             area_lights,
             &scene.bounds,
             shadow_resolution,
@@ -455,7 +460,7 @@ impl GpuScene {
             samplers,
         } = scene_textures(ctx, scene, &mut |bytes| staging.push(bytes))?;
         // The environment goes up with the textures.
-        let env_levels = super::environment::levels(scene.environment.as_ref());
+        let env_levels = super::environment::levels(environment);
         textures.push(super::environment::image(ctx, &env_levels)?);
         regions.push(
             env_levels
@@ -479,7 +484,7 @@ impl GpuScene {
             texture_samplers,
             samplers,
             shadow_view_count: table.views.iter().map(|v| v.views.len() as u32).sum(),
-            punctual_view_count: table.views[..scene.lights.len()]
+            punctual_view_count: table.views[..lights.len()]
                 .iter()
                 .map(|v| v.views.len() as u32)
                 .sum(),

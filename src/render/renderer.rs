@@ -226,16 +226,20 @@ pub struct Renderer {
     gpu: GpuScene,
     states: ResourceStates,
     instances: Instances,
-    /// The scene's lights (set_lights replaces them).
+    /// The scene's lights (set_lights replaces them), then the environment's sun.
     lights: Vec<Light>,
+    /// The environment's sun at strength 1 (src/render/environment.rs), the last light.
+    env_sun: Option<Light>,
     /// Emissive surfaces lit as area lights, after the scene's lights (area_lights.rs).
     area_lights: Vec<AreaLight>,
     /// Per instance: the area light it is, if any.
     area_light_of: Vec<Option<usize>>,
     /// The scene's bounds (light views are fitted to them).
     bounds: Aabb,
-    /// The environment's frame uniform (src/render/environment.rs).
+    /// The environment's frame uniform (src/render/environment.rs), and what its stored
+    /// texels are multiplied by besides the strength.
     environment: Vec4,
+    environment_texel_scale: f32,
     specular_needed: bool,
     /// Frames since the temporal trace's history began, and the camera of the last one.
     history_frames: u64,
@@ -257,6 +261,28 @@ pub struct Renderer {
 impl Renderer {
     pub fn new(ctx: &Arc<Context>, scene: &Scene, settings: RenderSettings) -> VkResult<Renderer> {
         let mut states = ResourceStates::default();
+        // An environment image's sun is lit as a directional light (shadow maps, injection);
+        // the cones see the rest of the sky.
+        let split = scene
+            .environment
+            .as_ref()
+            .and_then(super::environment::split_sun);
+        let environment = split
+            .as_ref()
+            .map(|s| &s.rest)
+            .or(scene.environment.as_ref());
+        let env_sun = split.as_ref().map(|s| s.sun.clone());
+        let mut lights = scene.lights.clone();
+        if let (Some(sun), Some(env)) = (&env_sun, environment) {
+            let mut sun = sun.clone();
+            sun.radiance *= env.strength;
+            log::info!(
+                "the environment's sun: {} W/m^2 from {:?}, lit as a directional light",
+                sun.radiance,
+                (-sun.direction).to_array()
+            );
+            lights.push(sun);
+        }
         let area_lights = area_lights_of(scene, &settings);
         let mut area_light_of = vec![None; scene.instances.len()];
         for (k, e) in area_lights.iter().enumerate() {
@@ -265,6 +291,8 @@ impl Renderer {
         let gpu = GpuScene::upload(
             ctx,
             scene,
+            &lights,
+            environment,
             &mut states,
             &area_lights,
             settings.shadow_resolutions(),
@@ -364,11 +392,13 @@ impl Renderer {
             gpu,
             states,
             instances,
-            lights: scene.lights.clone(),
+            lights,
+            env_sun,
             area_lights,
             area_light_of,
             bounds: scene.bounds,
-            environment: super::environment::uniform(scene.environment.as_ref()),
+            environment: super::environment::uniform(environment),
+            environment_texel_scale: super::environment::texel_scale(environment),
             specular_needed: scene
                 .materials
                 .iter()
@@ -896,10 +926,15 @@ impl Renderer {
     }
 
     /// Moves or changes the lights (one per scene light, each of its kind as loaded, so the
-    /// shadow views keep their number): the next frame draws their shadow maps and lights the
-    /// voxels with them.
+    /// shadow views keep their number; the environment's sun stays as it is): the next frame
+    /// draws their shadow maps and lights the voxels with them.
     pub fn set_lights(&mut self, lights: &[Light]) -> VkResult<()> {
         use super::shadows::light_views;
+        let mut lights = lights.to_vec();
+        if self.env_sun.is_some() {
+            lights.extend(self.lights.last().cloned());
+        }
+        let lights = &lights[..];
         let views = light_views(
             lights,
             &self.bounds,
@@ -920,6 +955,26 @@ impl Renderer {
         self.write_lights();
         self.relight();
         Ok(())
+    }
+
+    /// The environment's strength (None without an environment).
+    pub fn environment_strength(&self) -> Option<f32> {
+        (self.environment.w > 0.0).then(|| self.environment.x / self.environment_texel_scale)
+    }
+
+    /// Scales the environment's radiance by `strength` (its `--env-strength`; nothing without
+    /// an environment). The voxels are lit again, as after a light moved: their bounce gathers
+    /// it.
+    pub fn set_environment_strength(&mut self, strength: f32) {
+        if self.environment.w > 0.0 && self.environment_strength() != Some(strength) {
+            self.environment.x = strength * self.environment_texel_scale;
+            self.history_reset = true;
+            if let (Some(sun), Some(last)) = (&self.env_sun, self.lights.last_mut()) {
+                last.radiance = sun.radiance * strength;
+                self.write_lights();
+            }
+            self.relight();
+        }
     }
 
     /// The next frame draws every shadow map and lights the voxels again (bounces included),

@@ -220,6 +220,90 @@ pub fn load_image(path: &Path) -> Result<EnvImage, String> {
     })
 }
 
+/// A clear daylight sky (equirectangular, `width` x `height`): blue at the zenith, pale at
+/// the horizon, a brown ground below it, and a sun of angular radius 0.75 degrees (wider than
+/// the real one, so that a 512-texel image holds it) towards elevation `sun_el_deg` and
+/// azimuth `sun_az_deg` (as `--sun`: 0 is +Z, 90 is +X) that gives `sun_irradiance` W/m^2 to
+/// a surface facing it. The sky alone gives an open floor about 2.6 W/m^2. Radiance units are
+/// W/sr/m^2, as the scenes' lights. The project's `assets/sky.hdr` is
+/// `daylight_sky(512, 256, 40, 30, 20)`.
+pub fn daylight_sky(
+    width: u32,
+    height: u32,
+    sun_el_deg: f32,
+    sun_az_deg: f32,
+    sun_irradiance: f32,
+) -> EnvImage {
+    let (el, az) = (sun_el_deg.to_radians(), sun_az_deg.to_radians());
+    let sun = Vec3::new(el.cos() * az.sin(), el.sin(), el.cos() * az.cos());
+    let sun_radius = 0.75f32.to_radians();
+    let zenith = Vec3::new(0.30, 0.50, 1.00);
+    let horizon = Vec3::new(1.00, 0.97, 0.92);
+    let ground = Vec3::new(0.30, 0.25, 0.20) * 0.5;
+    let direction = |x: u32, y: u32| {
+        equirect_direction(
+            (x as f32 + 0.5) / width as f32,
+            (y as f32 + 0.5) / height as f32,
+        )
+    };
+    let mut texels = Vec::with_capacity((width * height) as usize);
+    let mut sun_texels = Vec::new();
+    let mut sun_solid_angle = 0.0f32;
+    for y in 0..height {
+        let v = (y as f32 + 0.5) / height as f32;
+        let texel_solid_angle = (2.0 * PI / width as f32) * (PI / height as f32) * (v * PI).sin();
+        for x in 0..width {
+            let d = direction(x, y);
+            let up = d.y.max(0.0).powf(0.4);
+            let sky = horizon.lerp(zenith, up);
+            // A glow around the sun, and a soft horizon line into the ground.
+            let glow = Vec3::new(1.0, 0.85, 0.6)
+                * 1.5
+                * (-(d.dot(sun).clamp(-1.0, 1.0).acos()) / 0.15).exp();
+            let above = ((d.y + 0.02) / 0.04).clamp(0.0, 1.0);
+            texels.push(ground.lerp(sky + glow, above));
+            if d.dot(sun) >= sun_radius.cos() {
+                sun_texels.push(texels.len() - 1);
+                sun_solid_angle += texel_solid_angle;
+            }
+        }
+    }
+    if sun_texels.is_empty() {
+        // Too coarse an image for the disk: the texel the sun lies in.
+        let (u, v) = equirect_uv(sun);
+        let x = ((u * width as f32) as u32).min(width - 1);
+        let y = ((v * height as f32) as u32).min(height - 1);
+        sun_texels.push((y * width + x) as usize);
+        sun_solid_angle = (2.0 * PI / width as f32) * (PI / height as f32) * (v * PI).sin();
+    }
+    let sun_radiance = Vec3::new(1.0, 0.95, 0.88) * sun_irradiance / sun_solid_angle;
+    for i in sun_texels {
+        texels[i] += sun_radiance;
+    }
+    EnvImage {
+        path: PathBuf::from(format!(
+            "daylight sky {width}x{height}, sun at {sun_el_deg},{sun_az_deg}"
+        )),
+        width,
+        height,
+        texels,
+    }
+}
+
+/// Writes an environment image as Radiance .hdr (RGBE).
+pub fn save_hdr(img: &EnvImage, path: &Path) -> Result<(), String> {
+    let err = |e: String| format!("{}: {e}", path.display());
+    let file = std::fs::File::create(path).map_err(|e| err(e.to_string()))?;
+    let pixels: Vec<image::Rgb<f32>> = img
+        .texels
+        .iter()
+        .map(|t| image::Rgb(t.to_array()))
+        .collect();
+    image::codecs::hdr::HdrEncoder::new(std::io::BufWriter::new(file))
+        .encode(&pixels, img.width as usize, img.height as usize)
+        .map_err(|e| err(e.to_string()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -258,5 +342,52 @@ mod tests {
         assert!(e.starts_with("missing.hdr:"), "{e}");
         assert!(Environment::from_spec("1,-1,1", 1.0, 0.0).is_err());
         assert!(Environment::from_spec("1,1,1", -1.0, 0.0).is_err());
+    }
+}
+
+#[cfg(test)]
+mod sky_tests {
+    use super::*;
+
+    fn bundled() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/sky.hdr")
+    }
+
+    /// Writes assets/sky.hdr (run once: `cargo test write_the_bundled_sky -- --ignored`).
+    #[test]
+    #[ignore]
+    fn write_the_bundled_sky() {
+        save_hdr(&daylight_sky(512, 256, 40.0, 30.0, 20.0), &bundled()).unwrap();
+    }
+
+    /// The bundled sky is the generator's, within what RGBE keeps (1% of a texel's largest
+    /// channel), and its sun gives the irradiance asked for.
+    #[test]
+    fn the_bundled_sky_is_the_generators() {
+        let sky = daylight_sky(512, 256, 40.0, 30.0, 20.0);
+        let file = load_image(&bundled()).unwrap();
+        assert_eq!((file.width, file.height), (512, 256));
+        for (a, b) in file.texels.iter().zip(&sky.texels) {
+            assert!(
+                (*a - *b).abs().max_element() <= 0.01 * b.max_element() + 1e-6,
+                "{a} {b}"
+            );
+        }
+        // Irradiance on a surface facing the sun, from the texels brighter than the sky.
+        let (el, az) = (40f32.to_radians(), 30f32.to_radians());
+        let sun = Vec3::new(el.cos() * az.sin(), el.sin(), el.cos() * az.cos());
+        let mut e = 0.0;
+        for y in 0..sky.height {
+            let v = (y as f32 + 0.5) / sky.height as f32;
+            let solid = (2.0 * PI / sky.width as f32) * (PI / sky.height as f32) * (v * PI).sin();
+            for x in 0..sky.width {
+                let t = sky.texel(x, y);
+                if t.y > 100.0 {
+                    let d = equirect_direction((x as f32 + 0.5) / sky.width as f32, v);
+                    e += t.y * solid * d.dot(sun);
+                }
+            }
+        }
+        assert!((e - 20.0 * 0.95).abs() < 0.2, "sun irradiance {e}");
     }
 }

@@ -56,6 +56,10 @@ pub const CONTROLS: &[(&str, &str)] = &[
         "turn the main light about the scene's vertical axis",
     ),
     ("P", "pause / resume animations and the spin"),
+    (
+        "Y",
+        "environment strength (--env): x1, x2, x4, off, x0.25, x0.5 of --env-strength",
+    ),
     ("- / =", "exposure down / up one stop"),
     ("T", "print the per-pass timings"),
     (
@@ -96,6 +100,9 @@ const LETTERS: [KeyCode; 26] = [
     KeyCode::KeyY,
     KeyCode::KeyZ,
 ];
+/// What the Y key steps the environment's strength through, times --env-strength.
+const ENV_FACTORS: [f32; 6] = [1.0, 2.0, 4.0, 0.0, 0.25, 0.5];
+
 const DIGITS: [KeyCode; 10] = [
     KeyCode::Digit0,
     KeyCode::Digit1,
@@ -192,6 +199,8 @@ struct App {
     voxels: u32,
     mip: Option<u32>,
     exposure: f32,
+    /// Times --env-strength (the Y key).
+    env_factor: f32,
     paused: bool,
     /// Settings changed: rebuild the renderer before the next frame.
     rebuild: bool,
@@ -269,6 +278,7 @@ pub fn run(opts: ViewOptions) -> Result<ViewReport> {
         voxels: s.gi.voxels,
         mip: s.mip,
         exposure: opts.exposure,
+        env_factor: 1.0,
         paused: false,
         rebuild: true,
         recreate: true,
@@ -427,6 +437,22 @@ impl App {
         s
     }
 
+    /// The live renderer's environment at --env-strength times the Y key's factor.
+    fn apply_env_factor(&mut self) {
+        if let Some(mut win) = self.win.take() {
+            self.apply_env_factor_to(&mut win);
+            self.win = Some(win);
+        }
+    }
+
+    fn apply_env_factor_to(&self, win: &mut Windowed) {
+        let base = self.opts.scene.environment.as_ref().map(|e| e.strength);
+        if let (Some(live), Some(base)) = (win.live.as_mut(), base) {
+            live.renderer
+                .set_environment_strength(base * self.env_factor);
+        }
+    }
+
     fn describe(&self) -> String {
         let mode = if self.gi_on {
             mode_name(self.mode).to_string()
@@ -437,8 +463,12 @@ impl App {
             (Mode::VoxelsRadiance, Some(m)) if self.gi_on => format!(" mip {m}"),
             _ => String::new(),
         };
+        let sky = match self.opts.scene.environment {
+            Some(_) => format!(" | sky x{}", self.env_factor),
+            None => String::new(),
+        };
         format!(
-            "{mode}{mip} | {} bounce{} | {}^3 | EV {:+}",
+            "{mode}{mip} | {} bounce{} | {}^3 | EV {:+}{sky}",
             self.bounces,
             if self.bounces == 1 { "" } else { "s" },
             self.voxels,
@@ -538,6 +568,16 @@ impl App {
                 self.rebuild = true;
             }
             KeyCode::KeyP => self.paused = !self.paused,
+            KeyCode::KeyY => {
+                if self.opts.scene.environment.is_some() {
+                    let i = ENV_FACTORS.iter().position(|&f| f == self.env_factor);
+                    self.env_factor = ENV_FACTORS[i.map_or(0, |i| (i + 1) % ENV_FACTORS.len())];
+                    self.apply_env_factor();
+                } else {
+                    println!("no environment (--env R,G,B or --env FILE.hdr)");
+                    changed = false;
+                }
+            }
             KeyCode::Minus => self.exposure -= 1.0,
             KeyCode::Equal => self.exposure += 1.0,
             KeyCode::KeyT => {
@@ -636,6 +676,7 @@ impl App {
             let display = Display::new(&self.ctx, renderer.radiance_image())?;
             win.live = Some(Live { display, renderer });
             self.rebuild = false;
+            self.apply_env_factor_to(win);
         }
         Ok(true)
     }
