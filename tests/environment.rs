@@ -292,8 +292,10 @@ fn an_environment_image_lights_what_faces_its_texels() {
     let want = mean_where(&reference::render(&s, &st), |_, _| true);
     let got = mean_where(&img, |_, _| true);
     eprintln!("wall under one texel: {got} against the path tracer's {want}");
+    // The texel is much brighter than the rest: lit as the environment's sun, a directional
+    // light (src/render/environment.rs). Measured 0.4% off.
     assert!(
-        ((got - want) / want).abs().max_element() < 0.25,
+        ((got - want) / want).abs().max_element() < 0.02,
         "{got} against {want}"
     );
     let turned = mean_where(&render(&wall(180.0), settings(16)), |_, _| true);
