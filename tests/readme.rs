@@ -45,16 +45,17 @@ fn words(line: &str) -> Vec<String> {
     out
 }
 
-/// `../shared/...` as the repository's neighbour, so the command runs from anywhere.
+/// `../shared/...` as the repository's neighbour and `assets/...` as the repository's, so the
+/// command runs from anywhere.
 fn resolve(arg: &str) -> String {
-    match arg.strip_prefix("../shared/") {
-        Some(rest) => Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("../shared")
-            .join(rest)
-            .display()
-            .to_string(),
-        None => arg.to_string(),
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    if let Some(rest) = arg.strip_prefix("../shared/") {
+        return root.join("../shared").join(rest).display().to_string();
     }
+    if let Some(rest) = arg.strip_prefix("assets/") {
+        return root.join("assets").join(rest).display().to_string();
+    }
+    arg.to_string()
 }
 
 #[test]
