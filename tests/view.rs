@@ -626,3 +626,33 @@ fn the_camera_key_prints_options_that_render_the_window_s_view() {
     assert!(flip < 1e-3, "FLIP {flip} ({line})");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn the_y_key_steps_the_environments_strength_as_env_strength_would() {
+    // The bundled Cornell box, open at the front, under a uniform sky: Y at frame 2 doubles
+    // its strength, as --env-strength 2 does for render.
+    let common = [
+        "--accumulate",
+        "1",
+        "--width",
+        "64",
+        "--height",
+        "64",
+        "--env",
+        "0.5,0.6,0.8",
+        "--shadow-res",
+        "256",
+    ];
+    let (flip, shot, printed) = window_against_render(
+        "env-key",
+        &common,
+        &["--frames", "6", "--press", "2:y"],
+        &["--env-strength", "2"],
+    );
+    assert_shows_something(&shot, "screenshot");
+    assert!(flip < 0.005, "FLIP {flip}");
+    assert!(
+        printed.contains("sky x2"),
+        "the key's setting was not printed:\n{printed}"
+    );
+}
