@@ -178,8 +178,9 @@ fn a_floor_under_a_roof_open_on_one_side_matches_the_path_tracer() {
     let e = rel_mse(&img, &reference);
     eprintln!("roof open on one side: relMSE {e:.4}");
     // Measured 0.089 (2026-12-04; 0.031 against a path tracer of two bounces, whose own
-    // distance to the full one is 0.044): the cones see less of the sky through the opening
-    // than there is (issue 31's goal is 0.02).
+    // distance to the full one is 0.044; issue 31's goal is 0.02). The walls' fronts face out,
+    // and a zero-thickness surface's voxel reflects to its front only (0.024 wound inwards,
+    // docs/environment.md).
     assert!(e < 0.1, "relMSE {e}");
 }
 
