@@ -1123,6 +1123,21 @@ fn info(c: InfoCmd) -> Result<()> {
     let mut scene = load_scene(&scene_path)?;
     scene.environment = environment;
     c.camera.apply(&mut scene)?;
+    print_scene(&scene);
+    let ctx = match context(&c.device) {
+        Ok(ctx) => ctx,
+        Err(e) => {
+            println!("device     none usable: {e}");
+            return Ok(());
+        }
+    };
+    println!("device     {}", ctx.device_info);
+    print_render(&ctx, &scene, &c.render)
+}
+
+/// `info`'s account of the scene: its geometry, materials, environment, lights, animations,
+/// bounds and cameras.
+fn print_scene(scene: &Scene) {
     println!("scene      {}", scene.source.display());
     println!("triangles  {}", scene.triangle_count());
     println!(
@@ -1199,18 +1214,15 @@ fn info(c: InfoCmd) -> Result<()> {
             .collect();
         println!("cameras    {} (--camera NAME|INDEX)", list.join(", "));
     }
-    let ctx = match context(&c.device) {
-        Ok(ctx) => ctx,
-        Err(e) => {
-            println!("device     none usable: {e}");
-            return Ok(());
-        }
-    };
-    println!("device     {}", ctx.device_info);
+}
+
+/// `info`'s account of a render with these options: its passes, grid, area lights and GPU
+/// memory.
+fn print_render(ctx: &std::sync::Arc<Context>, scene: &Scene, render: &RenderOpts) -> Result<()> {
     // What a render with these options would run and allocate.
-    let settings = c.render.settings()?;
+    let settings = render.settings()?;
     let mode = settings.mode;
-    let renderer = Renderer::new(&ctx, &scene, settings)?;
+    let renderer = Renderer::new(ctx, scene, settings)?;
     println!(
         "passes     {} ({mode:?} mode)",
         renderer.passes().join(", ")

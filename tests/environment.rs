@@ -8,13 +8,12 @@ mod gpu;
 use glam::Vec3;
 use gpu::*;
 use std::f32::consts::PI;
-use std::sync::Arc;
 use voxgi::gi::GiSettings;
 use voxgi::output::RadianceImage;
 use voxgi::reference::{self, ReferenceSettings};
 use voxgi::render::{Mode, RenderSettings};
 use voxgi::scene::environment::EnvImage;
-use voxgi::scene::{EnvSource, Environment, Scene};
+use voxgi::scene::{Environment, Scene};
 
 fn settings(size: u32) -> RenderSettings {
     RenderSettings {
@@ -197,16 +196,7 @@ fn coordinate_sky(w: u32, h: u32, turn_deg: f32) -> Environment {
             )
         })
         .collect();
-    Environment {
-        source: EnvSource::Image(Arc::new(EnvImage {
-            path: "coordinates.hdr".into(),
-            width: w,
-            height: h,
-            texels,
-        })),
-        strength: 1.0,
-        rotation: turn_deg.to_radians(),
-    }
+    Environment::image(EnvImage::new("coordinates.hdr", w, h, texels)).turned(turn_deg)
 }
 
 /// The background shows the environment by the mapping of CONVENTIONS.md, turned as asked.
@@ -270,16 +260,8 @@ fn an_environment_image_lights_what_faces_its_texels() {
             m,
         );
         look_at(&mut s, Vec3::new(3.0, 0.0, 0.0), Vec3::ZERO, 20.0);
-        s.environment = Some(Environment {
-            source: EnvSource::Image(Arc::new(EnvImage {
-                path: "one-texel.hdr".into(),
-                width: w,
-                height: h,
-                texels,
-            })),
-            strength: 1.0,
-            rotation: turn.to_radians(),
-        });
+        let sky = EnvImage::new("one-texel.hdr", w, h, texels);
+        s.environment = Some(Environment::image(sky).turned(turn));
         s
     };
     let s = wall(0.0);

@@ -806,16 +806,7 @@ fn cli_bad_input_fails_cleanly() {
 fn one_texel_sky(w: u32, h: u32, x: u32, y: u32, le: f32, turn_deg: f32) -> Environment {
     let mut texels = vec![Vec3::ZERO; (w * h) as usize];
     texels[(y * w + x) as usize] = Vec3::splat(le);
-    Environment {
-        source: EnvSource::Image(std::sync::Arc::new(environment::EnvImage {
-            path: "one-texel.hdr".into(),
-            width: w,
-            height: h,
-            texels,
-        })),
-        strength: 1.0,
-        rotation: turn_deg.to_radians(),
-    }
+    Environment::image(environment::EnvImage::new("one-texel.hdr", w, h, texels)).turned(turn_deg)
 }
 
 /// A white (albedo 1) Lambertian sphere under a uniform sky Le, nothing else: every path

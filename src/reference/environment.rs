@@ -103,23 +103,13 @@ mod tests {
     use super::*;
     use crate::reference::sampling::Pcg32;
     use crate::scene::environment::EnvImage;
-    use std::sync::Arc;
 
     fn image_env(w: u32, h: u32, texel: impl Fn(u32, u32) -> Vec3, turn_deg: f32) -> Environment {
         let texels = (0..h)
             .flat_map(|y| (0..w).map(move |x| (x, y)))
             .map(|(x, y)| texel(x, y))
             .collect();
-        Environment {
-            source: EnvSource::Image(Arc::new(EnvImage {
-                path: "test.hdr".into(),
-                width: w,
-                height: h,
-                texels,
-            })),
-            strength: 1.0,
-            rotation: turn_deg.to_radians(),
-        }
+        Environment::image(EnvImage::new("test.hdr", w, h, texels)).turned(turn_deg)
     }
 
     #[test]

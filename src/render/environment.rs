@@ -210,14 +210,12 @@ pub fn split_sun(env: &Environment) -> Option<SunSplit> {
         direction: -towards,
     };
     let rest = Environment {
-        source: EnvSource::Image(Arc::new(EnvImage {
-            path: img.path.clone(),
-            width: img.width,
-            height: img.height,
-            texels,
-        })),
         strength: env.strength,
         rotation: env.rotation,
+        ..Environment::image(EnvImage {
+            texels,
+            ..(**img).clone()
+        })
     };
     Some(SunSplit { sun, rest })
 }
@@ -243,12 +241,7 @@ mod tests {
 
     #[test]
     fn the_bundled_skys_sun_becomes_a_directional_light() {
-        let img = daylight_sky(512, 256, 40.0, 30.0, 20.0);
-        let mut env = Environment {
-            source: EnvSource::Image(Arc::new(img)),
-            strength: 1.0,
-            rotation: 0.0,
-        };
+        let mut env = Environment::image(daylight_sky(512, 256, 40.0, 30.0, 20.0));
         let split = split_sun(&env).expect("a sun");
         let (el, az) = (40f32.to_radians(), 30f32.to_radians());
         let towards = Vec3::new(el.cos() * az.sin(), el.sin(), el.cos() * az.cos());
@@ -274,12 +267,7 @@ mod tests {
         assert!((-turned.sun.direction).dot(env.to_world(towards)) > 0.9999);
         // A uniform sky, or one without a small bright spot, keeps everything.
         assert!(split_sun(&Environment::uniform(Vec3::ONE)).is_none());
-        let overcast = daylight_sky(64, 32, 40.0, 30.0, 0.0);
-        let env = Environment {
-            source: EnvSource::Image(Arc::new(overcast)),
-            strength: 1.0,
-            rotation: 0.0,
-        };
-        assert!(split_sun(&env).is_none());
+        let overcast = Environment::image(daylight_sky(64, 32, 40.0, 30.0, 0.0));
+        assert!(split_sun(&overcast).is_none());
     }
 }

@@ -258,31 +258,54 @@ pub struct Renderer {
     ctx: Arc<Context>,
 }
 
+/// The lights the renderer draws and the environment its cones see.
+struct SceneLights {
+    /// The scene's lights, then the environment's sun.
+    lights: Vec<Light>,
+    environment: Option<crate::scene::Environment>,
+    /// The environment's sun at strength 1.
+    env_sun: Option<Light>,
+}
+
+/// An environment image's sun is lit as a directional light (shadow maps, injection); the
+/// cones see the rest of the sky.
+fn scene_lights(scene: &Scene) -> SceneLights {
+    let split = scene
+        .environment
+        .as_ref()
+        .and_then(super::environment::split_sun);
+    let mut lights = scene.lights.clone();
+    let Some(split) = split else {
+        return SceneLights {
+            lights,
+            environment: scene.environment.clone(),
+            env_sun: None,
+        };
+    };
+    let mut sun = split.sun.clone();
+    sun.radiance *= split.rest.strength;
+    log::info!(
+        "the environment's sun: {} W/m^2 from {:?}, lit as a directional light",
+        sun.radiance,
+        (-sun.direction).to_array()
+    );
+    lights.push(sun);
+    SceneLights {
+        lights,
+        environment: Some(split.rest),
+        env_sun: Some(split.sun),
+    }
+}
+
 impl Renderer {
     pub fn new(ctx: &Arc<Context>, scene: &Scene, settings: RenderSettings) -> VkResult<Renderer> {
         let mut states = ResourceStates::default();
-        // An environment image's sun is lit as a directional light (shadow maps, injection);
-        // the cones see the rest of the sky.
-        let split = scene
-            .environment
-            .as_ref()
-            .and_then(super::environment::split_sun);
-        let environment = split
-            .as_ref()
-            .map(|s| &s.rest)
-            .or(scene.environment.as_ref());
-        let env_sun = split.as_ref().map(|s| s.sun.clone());
-        let mut lights = scene.lights.clone();
-        if let (Some(sun), Some(env)) = (&env_sun, environment) {
-            let mut sun = sun.clone();
-            sun.radiance *= env.strength;
-            log::info!(
-                "the environment's sun: {} W/m^2 from {:?}, lit as a directional light",
-                sun.radiance,
-                (-sun.direction).to_array()
-            );
-            lights.push(sun);
-        }
+        let SceneLights {
+            lights,
+            environment,
+            env_sun,
+        } = scene_lights(scene);
+        let environment = environment.as_ref();
         let area_lights = area_lights_of(scene, &settings);
         let mut area_light_of = vec![None; scene.instances.len()];
         for (k, e) in area_lights.iter().enumerate() {

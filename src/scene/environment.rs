@@ -37,6 +37,22 @@ pub struct EnvImage {
 }
 
 impl EnvImage {
+    /// An image of `width` x `height` texels of linear radiance, row by row from the top;
+    /// `name` stands for its file in messages.
+    pub fn new(name: &str, width: u32, height: u32, texels: Vec<Vec3>) -> EnvImage {
+        assert_eq!(
+            texels.len(),
+            (width * height) as usize,
+            "{name}: texel count"
+        );
+        EnvImage {
+            path: PathBuf::from(name),
+            width,
+            height,
+            texels,
+        }
+    }
+
     pub fn texel(&self, x: u32, y: u32) -> Vec3 {
         self.texels[(y * self.width + x) as usize]
     }
@@ -83,6 +99,21 @@ impl Environment {
             strength: 1.0,
             rotation: 0.0,
         }
+    }
+
+    /// An image environment at strength 1, not turned.
+    pub fn image(img: EnvImage) -> Environment {
+        Environment {
+            source: EnvSource::Image(Arc::new(img)),
+            strength: 1.0,
+            rotation: 0.0,
+        }
+    }
+
+    /// The same, turned by `deg` degrees about +Y (counter-clockwise seen from above).
+    pub fn turned(mut self, deg: f32) -> Environment {
+        self.rotation = deg.to_radians();
+        self
     }
 
     /// `--env`: "R,G,B" (a uniform radiance) or the path of an .hdr or .exr image; an error
