@@ -257,10 +257,11 @@ Cone trace_cone(vec3 origin, vec3 dir, float tan_half, float t0, float max_dist,
 #ifndef PAPER
     // Left the grid (the scene) before it was opaque: the environment, over the cone's
     // aperture, for the part of the cone still open.
-    vec3 end = world_to_grid(origin + dir * t);
-    bool left = any(lessThan(end, vec3(0.0))) || any(greaterThan(end, vec3(1.0)));
-    if (left && has_environment()) {
-        cone.radiance += (1.0 - cone.opacity) * environment_radiance(dir, tan_half);
+    if (has_environment() && cone.opacity < 1.0) {
+        vec3 end = world_to_grid(origin + dir * t);
+        if (any(lessThan(end, vec3(0.0))) || any(greaterThan(end, vec3(1.0)))) {
+            cone.radiance += (1.0 - cone.opacity) * environment_radiance(dir, tan_half);
+        }
     }
 #endif
     return cone;

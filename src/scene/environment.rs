@@ -386,7 +386,7 @@ mod sky_tests {
 
     /// Writes assets/sky.hdr (run once: `cargo test write_the_bundled_sky -- --ignored`).
     #[test]
-    #[ignore]
+    #[ignore = "writes assets/sky.hdr, which is committed; run by hand to make it again"]
     fn write_the_bundled_sky() {
         save_hdr(&daylight_sky(512, 256, 40.0, 30.0, 20.0), &bundled()).unwrap();
     }
