@@ -10,8 +10,12 @@ use voxgi::render::{Mode, RenderSettings, Renderer};
 use voxgi::scene::LightKind;
 use voxgi::vk::{vk, Access, Buffer, Graph, ResourceStates};
 
-/// Two passes write the same buffer; returns the validation messages seen.
-fn write_twice(omit: bool) -> Vec<String> {
+/// Records `passes` into a graph (the barriers of the pass named `omit` left out) over a
+/// 1 KiB transfer-target buffer; returns the validation messages seen.
+fn buffer_messages(
+    omit: Option<&str>,
+    passes: impl FnOnce(&mut Graph, &Buffer, &ash::Device),
+) -> Vec<String> {
     let ctx = context();
     let stats = ctx.stats.clone();
     {
@@ -26,20 +30,25 @@ fn write_twice(omit: bool) -> Vec<String> {
         let mut states = ResourceStates::default();
         ctx.one_shot(|cmd| {
             let mut g = Graph::new(&ctx, cmd, &mut states, None);
-            if omit {
-                g.omit_barriers_of = Some("second write".into());
-            }
-            g.pass("first write")
-                .buffer(&buf, Access::TransferWrite)
-                .record(|cmd| unsafe { ctx.device.cmd_fill_buffer(cmd, buf.raw, 0, 1024, 1) });
-            g.pass("second write")
-                .buffer(&buf, Access::TransferWrite)
-                .record(|cmd| unsafe { ctx.device.cmd_fill_buffer(cmd, buf.raw, 0, 1024, 2) });
+            g.omit_barriers_of = omit.map(String::from);
+            passes(&mut g, &buf, &ctx.device);
         })
         .unwrap();
     }
     drop(ctx);
     stats.messages()
+}
+
+/// Two passes write the same buffer; returns the validation messages seen.
+fn write_twice(omit: bool) -> Vec<String> {
+    buffer_messages(omit.then_some("second write"), |g, buf, d| {
+        g.pass("first write")
+            .buffer(buf, Access::TransferWrite)
+            .record(|cmd| unsafe { d.cmd_fill_buffer(cmd, buf.raw, 0, 1024, 1) });
+        g.pass("second write")
+            .buffer(buf, Access::TransferWrite)
+            .record(|cmd| unsafe { d.cmd_fill_buffer(cmd, buf.raw, 0, 1024, 2) });
+    })
 }
 
 #[test]
@@ -57,32 +66,13 @@ fn omitted_barrier_is_reported_by_synchronization_validation() {
 
 /// One pass of two steps, each writing the same buffer; returns the validation messages.
 fn two_steps(omit: Option<&str>) -> Vec<String> {
-    let ctx = context();
-    let stats = ctx.stats.clone();
-    {
-        let buf = Buffer::new(
-            &ctx,
-            "stepped target",
-            1024,
-            vk::BufferUsageFlags::TRANSFER_DST,
-            MemoryLocation::GpuOnly,
-        )
-        .unwrap();
-        let mut states = ResourceStates::default();
-        ctx.one_shot(|cmd| {
-            let mut g = Graph::new(&ctx, cmd, &mut states, None);
-            g.omit_barriers_of = omit.map(String::from);
-            g.pass("steps")
-                .buffer(&buf, Access::TransferWrite)
-                .record_steps(2, |cmd, step| unsafe {
-                    ctx.device
-                        .cmd_fill_buffer(cmd, buf.raw, 0, 1024, step as u32)
-                });
-        })
-        .unwrap();
-    }
-    drop(ctx);
-    stats.messages()
+    buffer_messages(omit, |g, buf, d| {
+        g.pass("steps")
+            .buffer(buf, Access::TransferWrite)
+            .record_steps(2, |cmd, step| unsafe {
+                d.cmd_fill_buffer(cmd, buf.raw, 0, 1024, step as u32)
+            });
+    })
 }
 
 #[test]
