@@ -182,13 +182,25 @@ fn leak_junction() {
     check_open("leak-junction", 0.0118)
 }
 
+/// sky-room's and sky-room-outward's goal (0.02) is open (docs/environment.md): 0.0232 and
+/// 0.0722 at 64x64, 0.0289 and 0.0818 at the tests' 48x48.
+#[test]
+fn sky_room() {
+    check_open("sky-room", 0.03)
+}
+
+#[test]
+fn sky_room_outward() {
+    check_open("sky-room-outward", 0.085)
+}
+
 macro_rules! cases {
     ($($f:ident => $name:literal,)*) => {
         $(#[test] fn $f() { check($name) })*
 
         #[test]
         fn every_case_has_a_test() {
-            let tested = [$($name,)* "leak-junction"];
+            let tested = [$($name,)* "leak-junction", "sky-room", "sky-room-outward"];
             for c in CASES {
                 assert!(tested.contains(&c.name), "no test for the hard case {}", c.name);
             }
@@ -223,6 +235,7 @@ cases! {
     emissive_dynamic => "emissive-dynamic",
     grazing_surfaces => "grazing-surfaces",
     cones_leave_grid => "cones-leave-grid",
+    sky_yard => "sky-yard",
     camera_in_volume => "camera-in-volume",
     camera_in_voxel => "camera-in-voxel",
     grid_48 => "grid-48",

@@ -5,6 +5,7 @@ use super::{max, mean, node_of, rel_mse, scaled, Case, Env, Goal};
 use crate::gi::GiSettings;
 use crate::render::Mode;
 use crate::scene::builder::*;
+use crate::scene::Environment;
 use anyhow::{ensure, Result};
 use glam::{DVec3, Mat4, Vec3};
 
@@ -319,6 +320,48 @@ pub static CASES: &[Case] = &[
         run: |env, gi| {
             let (b, cam) = yard(Vec3::new(-1.0, -1.0, -0.5));
             let s = env.load("yard", &b)?;
+            env.error_vs_reference(&s, &cam, gi)
+        },
+    },
+    Case {
+        name: "sky-yard",
+        group: "environment",
+        what: "the open yard under its sun and a uniform sky (0.3, 0.45, 0.8); relMSE against \
+               the reference",
+        metric: "relMSE",
+        goal: REF_GOAL,
+        run: |env, gi| {
+            let (b, cam) = yard(Vec3::new(-1.0, -1.0, -0.5));
+            let mut s = env.load("yard", &b)?;
+            s.environment = Some(Environment::uniform(Vec3::new(0.3, 0.45, 0.8)));
+            env.error_vs_reference(&s, &cam, gi)
+        },
+    },
+    Case {
+        name: "sky-room",
+        group: "environment",
+        what: "a 4 x 2.5 x 4 m room open on one side under a uniform sky, its walls facing \
+               in; relMSE against the reference",
+        metric: "relMSE",
+        goal: Goal::AtMost(0.02),
+        run: |env, gi| {
+            let (b, cam) = open_room(false);
+            let mut s = env.load("open-room", &b)?;
+            s.environment = Some(Environment::uniform(Vec3::ONE));
+            env.error_vs_reference(&s, &cam, gi)
+        },
+    },
+    Case {
+        name: "sky-room-outward",
+        group: "environment",
+        what: "the same room, its walls single quads facing out (their voxels reflect \
+               outwards only); relMSE against the reference",
+        metric: "relMSE",
+        goal: Goal::AtMost(0.02),
+        run: |env, gi| {
+            let (b, cam) = open_room(true);
+            let mut s = env.load("open-room-outward", &b)?;
+            s.environment = Some(Environment::uniform(Vec3::ONE));
             env.error_vs_reference(&s, &cam, gi)
         },
     },

@@ -640,3 +640,49 @@ pub fn emitter_grid(n: usize) -> (SceneBuilder, Camera) {
     add_camera_node(&mut b, &camera);
     (b, camera)
 }
+
+/// A 4 x 2.5 x 4 m room of single quads (albedo 0.6), open on its +X side, seen from outside
+/// through the opening; its walls and roof face into the room, or with `outward` the walls
+/// face out (a zero-thickness surface's voxel reflects to the side it faces only).
+pub fn open_room(outward: bool) -> (SceneBuilder, Camera) {
+    let mut b = SceneBuilder::new();
+    let grey = b.add_material(MaterialDesc::lambertian("grey", [0.6; 3]));
+    let (a, h) = (2.0, 2.5);
+    let wall = if outward { -1.0 } else { 1.0 };
+    let faces = vec![
+        quad(
+            [[-a, 0.0, -a], [a, 0.0, -a], [a, 0.0, a], [-a, 0.0, a]],
+            [0.0, 1.0, 0.0],
+            Some(grey),
+        ),
+        quad(
+            [[-a, h, -a], [a, h, -a], [a, h, a], [-a, h, a]],
+            [0.0, -1.0, 0.0],
+            Some(grey),
+        ),
+        quad(
+            [[-a, 0.0, -a], [-a, 0.0, a], [-a, h, a], [-a, h, -a]],
+            [wall, 0.0, 0.0],
+            Some(grey),
+        ),
+        quad(
+            [[-a, 0.0, -a], [a, 0.0, -a], [a, h, -a], [-a, h, -a]],
+            [0.0, 0.0, wall],
+            Some(grey),
+        ),
+        quad(
+            [[-a, 0.0, a], [a, 0.0, a], [a, h, a], [-a, h, a]],
+            [0.0, 0.0, -wall],
+            Some(grey),
+        ),
+    ];
+    let mesh = b.add_mesh("room", faces);
+    b.add_node(NodeDesc::new("room").mesh(mesh));
+    let camera = look_at(
+        Vec3::new(4.5, 1.2, 0.0),
+        Vec3::new(-1.0, 1.0, 0.0),
+        60.0,
+        0.05,
+    );
+    (b, camera)
+}
