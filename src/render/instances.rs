@@ -49,6 +49,8 @@ pub struct Instances {
     pub dynamic: Vec<bool>,
     /// The node of each instance.
     nodes: Vec<usize>,
+    /// The static instances, then the dynamic ones (what each voxelization pass draws).
+    kinds: [Vec<usize>; 2],
 }
 
 /// An instance a node move took elsewhere.
@@ -63,6 +65,13 @@ impl Instances {
     /// The scene's instances; those of `dynamic_nodes` are voxelized every frame.
     pub fn new(scene: &Scene, dynamic_nodes: &[usize]) -> Instances {
         let primitive = |i: &crate::scene::Instance| &scene.primitives[i.primitive as usize];
+        let dynamic: Vec<bool> = scene
+            .instances
+            .iter()
+            .map(|i| dynamic_nodes.contains(&i.node))
+            .collect();
+        let kinds =
+            [false, true].map(|d| (0..dynamic.len()).filter(|&i| dynamic[i] == d).collect());
         Instances {
             draws: scene
                 .instances
@@ -78,12 +87,9 @@ impl Instances {
                 .iter()
                 .map(|i| primitive(i).bounds)
                 .collect(),
-            dynamic: scene
-                .instances
-                .iter()
-                .map(|i| dynamic_nodes.contains(&i.node))
-                .collect(),
+            dynamic,
             nodes: scene.instances.iter().map(|i| i.node).collect(),
+            kinds,
         }
     }
 
@@ -93,10 +99,8 @@ impl Instances {
     }
 
     /// The instances voxelized with the dynamic geometry (or, with `false`, the static ones).
-    pub fn of_kind(&self, dynamic: bool) -> Vec<usize> {
-        (0..self.count())
-            .filter(|&i| self.dynamic[i] == dynamic)
-            .collect()
+    pub fn of_kind(&self, dynamic: bool) -> &[usize] {
+        &self.kinds[dynamic as usize]
     }
 
     pub fn any_dynamic(&self) -> bool {

@@ -757,9 +757,8 @@ impl Renderer {
             return;
         };
         let scene = self.scene();
-        let kinds = [false, true].map(|dynamic| self.instances.of_kind(dynamic));
-        let draw = |list: &[usize]| {
-            let (scene, list) = (&scene, list.to_vec());
+        let draw = |dynamic: bool| {
+            let (scene, list) = (&scene, self.instances.of_kind(dynamic));
             move |cmd: vk::CommandBuffer, p: &Pipeline, flags: u32, range: Range<usize>| unsafe {
                 let extra = |i: usize| {
                     let light = self.area_light_of[i].map_or(0, |_| crate::gi::EMITTER_LIGHT);
@@ -768,16 +767,16 @@ impl Renderer {
                 scene.draw(&self.ctx.device, cmd, p, extra, list[range].iter().copied())
             }
         };
-        let (draw_static, draw_dynamic) = (draw(&kinds[0]), draw(&kinds[1]));
+        let (draw_static, draw_dynamic) = (draw(false), draw(true));
         let inputs = StepInputs {
             geometry: (&self.gpu.vertices, &self.gpu.indices),
             scene_set: self.sets.scene_set(),
             draw_static: VoxelDraws {
-                count: kinds[0].len(),
+                count: self.instances.of_kind(false).len(),
                 draw: &draw_static,
             },
             draw_dynamic: VoxelDraws {
-                count: kinds[1].len(),
+                count: self.instances.of_kind(true).len(),
                 draw: &draw_dynamic,
             },
         };
