@@ -93,11 +93,7 @@ fn a_white_sphere_under_a_uniform_sky_is_the_sky() {
 #[test]
 fn an_open_floor_under_a_uniform_sky_gets_pi_le() {
     let (albedo, le) = (0.5, Vec3::new(2.0, 1.0, 0.5));
-    let mut s = empty_scene();
-    let m = lambert(&mut s, Vec3::splat(albedo));
-    floor(&mut s, 2.0, m);
-    top_camera(&mut s, 3.0, 40.0);
-    s.environment = Some(Environment::uniform(le));
+    let s = floor_under_sky(albedo, le);
     let img = render(&s, settings(32));
     let got = mean_where(&img, |x, y| (8..24).contains(&x) && (8..24).contains(&y));
     let want = le * albedo;

@@ -7,7 +7,7 @@ use gpu::*;
 use gpu_allocator::MemoryLocation;
 use voxgi::gi::GiSettings;
 use voxgi::render::{Mode, RenderSettings, Renderer};
-use voxgi::scene::LightKind;
+use voxgi::scene::{LightKind, Scene};
 use voxgi::vk::{vk, Access, Buffer, Graph, ResourceStates};
 
 /// Records `passes` into a graph (the barriers of the pass named `omit` left out) over a
@@ -88,18 +88,20 @@ fn steps_of_a_pass_get_the_barriers_between_them() {
     );
 }
 
-#[test]
-fn renderer_pass_without_its_barriers_is_reported() {
-    let mut s = empty_scene();
-    let m = lambert(&mut s, Vec3::splat(0.5));
-    floor(&mut s, 2.0, m);
-    top_camera(&mut s, 3.0, 60.0);
+/// A point light 1 m over the scene's floor, which the camera sees from 3 m above.
+fn light_from_above(s: &mut Scene) {
+    top_camera(s, 3.0, 60.0);
     s.lights.push(light(
         LightKind::Point,
         Vec3::splat(5.0),
         Vec3::new(0.0, 1.0, 0.0),
         Vec3::NEG_Y,
     ));
+}
+
+/// One frame of `s` at 32x32 with `settings`' mode and voxels, the barriers of the pass
+/// `omit` left out; returns the validation messages.
+fn renderer_messages(s: &Scene, settings: RenderSettings, omit: Option<&str>) -> Vec<String> {
     let ctx = context();
     let stats = ctx.stats.clone();
     {
@@ -107,15 +109,27 @@ fn renderer_pass_without_its_barriers_is_reported() {
             width: 32,
             height: 32,
             shadow_resolution: 64,
-            mode: Mode::Direct,
-            ..Default::default()
+            ..settings
         };
-        let mut r = Renderer::new(&ctx, &s, settings).unwrap();
-        r.omit_barriers_of = Some("lighting".into());
+        let mut r = Renderer::new(&ctx, s, settings).unwrap();
+        r.omit_barriers_of = omit.map(String::from);
         r.render(true).unwrap();
     }
     drop(ctx);
-    let msgs = stats.messages();
+    stats.messages()
+}
+
+#[test]
+fn renderer_pass_without_its_barriers_is_reported() {
+    let mut s = empty_scene();
+    let m = lambert(&mut s, Vec3::splat(0.5));
+    floor(&mut s, 2.0, m);
+    light_from_above(&mut s);
+    let direct = RenderSettings {
+        mode: Mode::Direct,
+        ..Default::default()
+    };
+    let msgs = renderer_messages(&s, direct, Some("lighting"));
     assert!(
         msgs.iter().any(|m| m.contains("SYNC-HAZARD")),
         "no hazard reported without the lighting pass's barriers: {msgs:#?}"
@@ -141,30 +155,13 @@ fn paper_frame(omit: Option<&str>) -> Vec<String> {
         ],
         m,
     );
-    top_camera(&mut s, 3.0, 60.0);
-    s.lights.push(light(
-        LightKind::Point,
-        Vec3::splat(5.0),
-        Vec3::new(0.0, 1.0, 0.0),
-        Vec3::NEG_Y,
-    ));
-    let ctx = context();
-    let stats = ctx.stats.clone();
-    {
-        let settings = RenderSettings {
-            width: 32,
-            height: 32,
-            shadow_resolution: 64,
-            gi: GiSettings::paper(16),
-            dynamic_nodes: vec![s.instances[2].node],
-            ..Default::default()
-        };
-        let mut r = Renderer::new(&ctx, &s, settings).unwrap();
-        r.omit_barriers_of = omit.map(String::from);
-        r.render(true).unwrap();
-    }
-    drop(ctx);
-    stats.messages()
+    light_from_above(&mut s);
+    let paper = RenderSettings {
+        gi: GiSettings::paper(16),
+        dynamic_nodes: vec![s.instances[2].node],
+        ..Default::default()
+    };
+    renderer_messages(&s, paper, omit)
 }
 
 /// Whether a message reports a hazard of `kind` on the image named `image` (through any of

@@ -144,6 +144,17 @@ pub fn floor(scene: &mut Scene, h: f32, material: u32) {
     );
 }
 
+/// A Lambertian floor of albedo `albedo` (half-size 2) under a uniform sky `le`, seen from
+/// 3 m above at 40 degrees: it gets irradiance pi Le, so its radiance is albedo x Le.
+pub fn floor_under_sky(albedo: f32, le: Vec3) -> Scene {
+    let mut s = empty_scene();
+    let m = lambert(&mut s, Vec3::splat(albedo));
+    floor(&mut s, 2.0, m);
+    top_camera(&mut s, 3.0, 40.0);
+    s.environment = Some(voxgi::scene::Environment::uniform(le));
+    s
+}
+
 /// A camera looking straight down at the origin from height `height`.
 pub fn top_camera(scene: &mut Scene, height: f32, yfov_deg: f32) {
     scene.camera = Camera {
