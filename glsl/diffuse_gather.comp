@@ -12,6 +12,10 @@
 // the cone set per frame (cones k, k + subsets, ...; k = frame mod subsets) and has them all
 // after `subsets` frames. When the light in the voxels changed, or on a cut (`reset`), every
 // block traces the whole set at once: that frame is a full one, as without a history.
+// A moving camera's history is blended from the blocks around each surface point, so it is
+// near the block's own cones but not them. Once the camera stops (`still`), each block traces
+// its cones afresh, one subset a frame, and after `subsets` frames holds exactly the whole set
+// at its own pixel, as a fresh start would: the still image does not depend on the way there.
 #include "common.glsl"
 #include "voxel_common.glsl"
 #define CONE_SET 2
@@ -31,34 +35,67 @@ layout(set = 1, binding = 10, rgba16f) uniform writeonly image2D gathered_specul
 #ifdef TEMPORAL
 // Per block, the frame before's (in) and this frame's (out): the cones' sums (irradiance rgb,
 // occlusion a), where the block's surface lies (xyz) with the weight of the cones summed (w:
-// 0 is no history), and its geometric normal (octahedral, xy).
+// 0 is no history), its geometric normal (octahedral, xy) with the first (z) and count (w) of
+// the subsets traced afresh since the camera stopped, and their sums (fresh).
 layout(set = 1, binding = 3, rgba32f) uniform readonly image2D history_in;
 layout(set = 1, binding = 4, rgba32f) uniform readonly image2D history_place_in;
-layout(set = 1, binding = 5, rgba16f) uniform readonly image2D history_normal_in;
+layout(set = 1, binding = 5, rgba32f) uniform readonly image2D history_normal_in;
 layout(set = 1, binding = 6, rgba32f) uniform writeonly image2D history_out;
 layout(set = 1, binding = 7, rgba32f) uniform writeonly image2D history_place_out;
-layout(set = 1, binding = 8, rgba16f) uniform writeonly image2D history_normal_out;
+layout(set = 1, binding = 8, rgba32f) uniform writeonly image2D history_normal_out;
+layout(set = 1, binding = 11, rgba32f) uniform readonly image2D history_fresh_in;
+layout(set = 1, binding = 12, rgba32f) uniform writeonly image2D history_fresh_out;
 #endif
 
 layout(push_constant) uniform Pass {
     mat4 prev_view_proj;  // TEMPORAL: the frame before's camera
     uint scale;           // pixels per block side
     uint subsets;         // TEMPORAL: frames to trace the whole cone set
-    uint frame_index;     // TEMPORAL: picks this frame's subset
+    uint frame_index;     // TEMPORAL: picks the subset a block starts from
     uint reset;           // TEMPORAL: 1 drops every block's history
+    uint still;           // TEMPORAL: 1 when the camera is the frame before's (jitter aside)
 } pass;
 
 #ifdef TEMPORAL
-// The history at world point p (geometric normal geo): the frame before's blocks around where
-// p was seen, bilinearly weighted, those that held the same surface only (as cone_trace.comp's
-// upsampling tests it). Sums and weight are both interpolated, so their ratio stays an estimate of the
-// whole set.
-void reproject(vec3 p, vec3 geo, out vec4 sums, out float weight) {
-    sums = vec4(0.0);
-    weight = 0.0;
-    if (pass.reset != 0u) return;
+// What a block carries from frame to frame.
+struct History {
+    vec4 sums;           // the cones' sums, over the cones of weight `weight`
+    float weight;        // 0: no history
+    vec4 fresh;          // the sums of the subsets traced at this block since the camera stopped
+    uint fresh_first;    // the first of those subsets
+    uint fresh_count;    // how many they are
+};
+
+// Whether the block's surface at `place` (normal nk) is the one at p (normal geo).
+bool same_surface(vec3 place, vec3 nk, vec3 p, vec3 geo) {
+    float vs = voxel_size();
+    vec3 d = place - p;
+    return abs(dot(d, geo)) <= 0.25 * vs && dot(d, d) <= 4.0 * vs * vs && dot(geo, nk) >= 0.9;
+}
+
+// The history at world point p (geometric normal geo) of block q. A still camera sees the
+// same point at the block's pixel (to the antialiasing's sub-pixel shift): its own history,
+// fresh sums included. A moving one: the frame before's blocks around where p was seen,
+// bilinearly weighted, those that held the same surface only (as cone_trace.comp's upsampling
+// tests it). Sums and weight are both interpolated, so their ratio stays an estimate of the
+// whole set; nothing of it is fresh.
+History reproject(ivec2 q, vec3 p, vec3 geo) {
+    History h = History(vec4(0.0), 0.0, vec4(0.0), 0u, 0u);
+    if (pass.reset != 0u) return h;
+    if (pass.still != 0u) {
+        vec4 place = imageLoad(history_place_in, q);
+        vec4 nk = imageLoad(history_normal_in, q);
+        if (place.w > 0.0 && same_surface(place.xyz, oct_decode(nk.xy), p, geo)) {
+            h.sums = imageLoad(history_in, q);
+            h.weight = place.w;
+            h.fresh = imageLoad(history_fresh_in, q);
+            h.fresh_first = uint(nk.z);
+            h.fresh_count = uint(nk.w);
+        }
+        return h;
+    }
     vec4 clip = pass.prev_view_proj * vec4(p, 1.0);
-    if (clip.w <= 0.0) return;
+    if (clip.w <= 0.0) return h;
     vec2 ndc = clip.xy / clip.w;
     // The viewport's height is negative (common.glsl's frames are y up): row 0 is ndc y = 1.
     vec2 pixel = vec2(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * vec2(frame.counts.yz);
@@ -69,7 +106,6 @@ void reproject(vec3 p, vec3 geo, out vec4 sums, out float weight) {
     // A still camera lands on the block itself (up to rounding): take it alone.
     f = mix(f, round(f), lessThan(abs(f - round(f)), vec2(1e-3)));
     ivec2 blocks = imageSize(history_place_in);
-    float vs = voxel_size();
     float wsum = 0.0;
     for (int k = 0; k < 4; k++) {
         ivec2 o = ivec2(k & 1, k >> 1);
@@ -80,16 +116,16 @@ void reproject(vec3 p, vec3 geo, out vec4 sums, out float weight) {
         vec4 place = imageLoad(history_place_in, c);
         if (place.w <= 0.0) continue;
         vec3 nk = oct_decode(imageLoad(history_normal_in, c).xy);
-        vec3 d = place.xyz - p;
-        if (abs(dot(d, geo)) > 0.25 * vs || dot(d, d) > 4.0 * vs * vs || dot(geo, nk) < 0.9) continue;
-        sums += w * imageLoad(history_in, c);
-        weight += w * place.w;
+        if (!same_surface(place.xyz, nk, p, geo)) continue;
+        h.sums += w * imageLoad(history_in, c);
+        h.weight += w * place.w;
         wsum += w;
     }
     if (wsum > 0.0) {
-        sums /= wsum;
-        weight /= wsum;
+        h.sums /= wsum;
+        h.weight /= wsum;
     }
+    return h;
 }
 #endif
 
@@ -107,6 +143,7 @@ void main() {
         imageStore(history_out, q, vec4(0.0));
         imageStore(history_place_out, q, vec4(0.0));
         imageStore(history_normal_out, q, vec4(0.0));
+        imageStore(history_fresh_out, q, vec4(0.0));
 #endif
         return;
     }
@@ -127,24 +164,56 @@ void main() {
     }
     imageStore(gathered_specular, q, specular);
 #ifdef TEMPORAL
-    vec4 sums;
-    float weight;
-    reproject(p, geo, sums, weight);
+    uint subsets = max(pass.subsets, 1u);
+    History h = reproject(q, p, geo);
+    // Complete once the sums hold the whole set's weight (to rounding).
+    bool partial = h.weight < whole * (1.0 - 1e-4);
+    bool refreshing = pass.still != 0u && h.fresh_count < subsets;
     if (pass.reset != 0u) {
         Gather g = diffuse_cones(origin, frame_n, t0, 0u, 1u);
-        sums = vec4(g.irradiance, g.occlusion);
-        weight = g.weight;
-    } else if (weight < whole * (1.0 - 1e-4)) {
-        // Complete once the sums hold the whole set's weight (to rounding).
-        uint subsets = max(pass.subsets, 1u);
-        Gather g = diffuse_cones(origin, frame_n, t0, pass.frame_index % subsets, subsets);
-        sums += vec4(g.irradiance, g.occlusion);
-        weight += g.weight;
+        h.sums = vec4(g.irradiance, g.occlusion);
+        h.weight = g.weight;
+        h.fresh = h.sums;
+        h.fresh_count = subsets;
+    } else if (partial || refreshing) {
+        // A block traces consecutive subsets, so it has them all after `subsets` frames: while
+        // moving, from the frame's number; at rest, from the one its fresh sums began at (a
+        // frame's number picks it; the block's count goes on, whatever the frames are called).
+        if (refreshing && h.fresh_count == 0u) h.fresh_first = pass.frame_index % subsets;
+        uint k = refreshing ? (h.fresh_first + h.fresh_count) % subsets
+                            : pass.frame_index % subsets;
+        Gather g = diffuse_cones(origin, frame_n, t0, k, subsets);
+        vec4 s = vec4(g.irradiance, g.occlusion);
+        if (partial) {
+            h.sums += s;
+            h.weight += g.weight;
+        }
+        if (refreshing) {
+            h.fresh += s;
+            h.fresh_count += 1u;
+        }
+        if (h.fresh_count >= subsets) {
+            // Every cone traced afresh at this pixel: the history is now exactly the set.
+            h.sums = h.fresh;
+            h.weight = whole;
+        }
     }
-    imageStore(history_out, q, sums);
-    imageStore(history_place_out, q, vec4(p, weight));
-    imageStore(history_normal_out, q, vec4(normals.zw, 0.0, 0.0));
-    imageStore(gathered, q, weight > 0.0 ? sums * (whole / weight) : vec4(0.0));
+    // Until the fresh sums are complete the blended ones stand: subsets differ by where their
+    // cones point, so part fresh and part blended would be further from the set than either.
+    vec4 estimate = h.sums;
+    if (pass.reset == 0u) {
+        estimate = h.weight > 0.0 ? h.sums * (whole / h.weight) : vec4(0.0);
+    }
+    if (pass.still == 0u && pass.reset == 0u) {
+        // Moving: what is traced now is at a point the next frame will not see again.
+        h.fresh = vec4(0.0);
+        h.fresh_count = 0u;
+    }
+    imageStore(history_out, q, h.sums);
+    imageStore(history_place_out, q, vec4(p, h.weight));
+    imageStore(history_normal_out, q, vec4(normals.zw, float(h.fresh_first), float(h.fresh_count)));
+    imageStore(history_fresh_out, q, h.fresh);
+    imageStore(gathered, q, estimate);
 #else
     Gather g = diffuse_cones(origin, frame_n, t0, 0u, 1u);
     imageStore(gathered, q, vec4(g.irradiance, g.occlusion));

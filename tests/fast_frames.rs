@@ -350,7 +350,8 @@ fn cones_that_skip_empty_space_see_what_they_saw() {
 fn a_moving_camera_converges_to_the_whole_cone_set() {
     // The camera steps sideways, and the surfaces behind the pole and the box it now sees
     // have no history: they trace a quarter of the cones a frame. N frames after it stops, the
-    // image is the whole set's from there (the rest of the history was reprojected).
+    // image is near the whole set's from there (the rest of the history was reprojected); the
+    // frames at rest trace every block afresh, so one more and it is the whole set's.
     let s = edges_scene();
     let mut moved = s.clone();
     look_at(
@@ -372,15 +373,63 @@ fn a_moving_camera_converges_to_the_whole_cone_set() {
             after,
         )
     };
-    let (first, done) = (step(0), step(n - 1));
+    let (first, done, rested) = (step(0), step(n - 1), step(n));
     let (e_first, e_done) = (rel_mse(&first, &whole), rel_mse(&done, &whole));
-    eprintln!("relMSE against the whole set: first frame {e_first}, frame {n} {e_done}");
+    let e_rested = rel_mse(&rested, &whole);
+    eprintln!(
+        "relMSE against the whole set: first frame {e_first}, frame {n} {e_done}, frame {} \
+         {e_rested}",
+        n + 1
+    );
     // The first frame's uncovered blocks traced a quarter of the cones.
     assert!(
         e_first > 1e-6,
         "the first frame already matches ({e_first})"
     );
     assert!(e_done < 1e-4, "after {n} frames: relMSE {e_done}");
+    // The same cones, summed by subsets: equal to rounding.
+    assert!(
+        e_rested < 1e-10,
+        "after {} frames: relMSE {e_rested}",
+        n + 1
+    );
+}
+
+#[test]
+fn a_camera_that_stops_ends_where_a_fresh_start_does() {
+    // The camera glides over four frames and stops. Moving, each block's history is blended
+    // from the blocks around where its surface was; at rest the blocks trace their cones
+    // afresh (N frames) and then the antialiasing mean begins, so the still image is the one a
+    // renderer started at that camera shows, mean and all.
+    let s = edges_scene();
+    let (from, to) = (Vec3::new(0.0, 1.2, 2.2), Vec3::new(0.6, 1.4, 2.0));
+    let target = Vec3::new(0.3, 0.5, -1.0);
+    let mut set = settings(Mode::Full, 4, 4);
+    set.accumulate = 8;
+    let mut start = s.clone();
+    look_at(&mut start, from, target, 60.0);
+    let mut end = s.clone();
+    look_at(&mut end, to, target, 60.0);
+    let rest = 4 + 8 + 2;
+    let glided = render_with(&start, set.clone(), |r| {
+        r.render(false).expect("frame");
+        for k in 1..=4 {
+            let mut at = s.clone();
+            look_at(&mut at, from.lerp(to, k as f32 / 4.0), target, 60.0);
+            r.camera = at.camera;
+            r.render(false).expect("frame");
+        }
+        for _ in 0..rest {
+            r.render(false).expect("frame");
+        }
+        r.render(true).expect("frame");
+    });
+    let fresh = frames(&end, set, 8 + 2, |_| {}, 0);
+    let e = rel_mse(&glided, &fresh);
+    let (d, i) = worst_pixel(&glided, &fresh);
+    eprintln!("stopped against fresh: relMSE {e}, worst pixel {i} off by {d}");
+    // The same cones summed by subsets, and the same frames of the mean: equal to rounding.
+    assert!(e < 1e-10 && d < 1e-4, "relMSE {e}, pixel {i} off by {d}");
 }
 
 #[test]

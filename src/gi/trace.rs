@@ -71,11 +71,16 @@ impl TraceLayout {
 pub struct TraceFrame {
     /// The camera of the frame before (the history's).
     pub prev_view_proj: Mat4,
-    /// Frames since the history began (0: this frame starts it): picks the subset of cones
-    /// to trace, and which history is read.
+    /// Frames since the history began (0: this frame starts it): picks which history is read.
     pub index: u64,
+    /// Picks the subset of cones a block that traces by subsets starts from; consecutive
+    /// frames give consecutive numbers while the camera moves.
+    pub subset: u64,
     /// Drop the history (the light in the voxels changed, the images are new, or a cut).
     pub reset: bool,
+    /// The camera is the frame before's (the antialiasing's sub-pixel shift aside): blocks
+    /// trace their cones afresh until they hold the whole set at their own pixels.
+    pub still: bool,
 }
 
 /// The frame's images and the volumes cones sample: what the trace and the unmatched pass read.
@@ -116,11 +121,13 @@ fn unmatched_list(ctx: &Arc<Context>, frame: &FrameImages) -> VkResult<Buffer> {
     )
 }
 
-/// The history of the temporal gather: its sums, their places and normals (one frame's).
+/// The history of the temporal gather (one frame's): its sums, their places and normals with
+/// how much was traced afresh since the camera stopped, and those fresh sums.
 struct History {
     sums: Image,
     place: Image,
     normal: Image,
+    fresh: Image,
 }
 
 impl History {
@@ -136,7 +143,8 @@ impl History {
         Ok(History {
             sums: image("sums", vk::Format::R32G32B32A32_SFLOAT)?,
             place: image("place", vk::Format::R32G32B32A32_SFLOAT)?,
-            normal: image("normal", vk::Format::R16G16B16A16_SFLOAT)?,
+            normal: image("normal", vk::Format::R32G32B32A32_SFLOAT)?,
+            fresh: image("fresh", vk::Format::R32G32B32A32_SFLOAT)?,
         })
     }
 }
@@ -208,6 +216,8 @@ impl Gather {
                     .image("history_out", &b.sums, Usage::Write)
                     .image("history_place_out", &b.place, Usage::Write)
                     .image("history_normal_out", &b.normal, Usage::Write)
+                    .image("history_fresh_in", &a.fresh, Usage::Read)
+                    .image("history_fresh_out", &b.fresh, Usage::Write)
             })
             .collect()
     }
@@ -255,8 +265,8 @@ impl Gather {
     }
 }
 
-/// mat4 prev_view_proj, uint scale, subsets, frame index, reset.
-const GATHER_PUSH_SIZE: u32 = 64 + 16;
+/// mat4 prev_view_proj, uint scale, subsets, frame index, reset, still.
+const GATHER_PUSH_SIZE: u32 = 64 + 20;
 /// uint mode, scale.
 const TRACE_PUSH_SIZE: u32 = 8;
 
@@ -448,8 +458,9 @@ impl Trace {
         for v in [
             self.layout.scale.max(1),
             subsets,
-            (time.index % subsets.max(1) as u64) as u32,
+            (time.subset % subsets.max(1) as u64) as u32,
             time.reset as u32,
+            time.still as u32,
         ] {
             push.extend(v.to_le_bytes());
         }

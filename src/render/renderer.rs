@@ -246,6 +246,10 @@ pub struct Renderer {
     prev_view_proj: Mat4,
     /// The next frame drops the temporal trace's history.
     history_reset: bool,
+    /// This frame's camera is the last one's; and the frames left until, after the camera
+    /// stopped, every block of the temporal trace has traced its cones afresh.
+    still: bool,
+    refresh_left: u32,
     /// Antialiasing: the mean's pass (None when off), the frames in the mean so far, and the
     /// unjittered camera of the last frame (another one starts the mean again).
     accumulate: Option<Accumulate>,
@@ -429,6 +433,8 @@ impl Renderer {
             history_frames: 0,
             prev_view_proj: Mat4::IDENTITY,
             history_reset: true,
+            still: false,
+            refresh_left: 0,
             accumulate,
             mean_frames: 0,
             mean_camera: Mat4::IDENTITY,
@@ -596,7 +602,18 @@ impl Renderer {
         // light (shadows or voxels), a cut, a resize (set_node_transform: a node).
         let (view, proj) = self.view_proj();
         let camera = proj * view;
-        if self.history_reset || self.shadows.any_dirty() || camera != self.mean_camera {
+        let moved = camera != self.mean_camera;
+        self.still = !self.history_reset && !moved;
+        if self.history_reset {
+            self.refresh_left = 0;
+        } else if moved {
+            self.refresh_left = self.temporal_subsets();
+        }
+        // While the temporal trace refreshes its blocks after the camera stopped, the diffuse
+        // light still changes: the mean starts when it is complete (its first frame is then
+        // what a fresh start's first frame is).
+        let refreshing = self.still && self.refresh_left > 0;
+        if self.history_reset || self.shadows.any_dirty() || moved || refreshing {
             self.mean_frames = 0;
         }
         let uniforms = self.uniforms();
@@ -638,6 +655,9 @@ impl Renderer {
         self.history_frames += 1;
         self.prev_view_proj = uniforms.view_proj;
         self.history_reset = false;
+        if refreshing {
+            self.refresh_left -= 1;
+        }
         self.mean_frames = self.mean_frames.saturating_add(1);
         self.mean_camera = camera;
         // The voxels now hold the geometry and its light until a node or a light moves.
@@ -832,10 +852,26 @@ impl Renderer {
         let time = TraceFrame {
             prev_view_proj: self.prev_view_proj,
             index: self.history_frames,
+            // At rest with the refresh done, the antialiasing mean's count, as after a fresh
+            // start: the frames after a stop then trace what a fresh start's frames trace.
+            subset: if self.still && self.refresh_left == 0 {
+                u64::from(self.mean_frames)
+            } else {
+                self.history_frames
+            },
             reset: self.history_reset,
+            still: self.still,
         };
         gi.trace
             .record_gather(&self.ctx, g, self.sets.scene_set(), &time, name);
+    }
+
+    /// Frames the temporal trace takes to trace the whole cone set by subsets (0: none).
+    fn temporal_subsets(&self) -> u32 {
+        self.gi
+            .as_ref()
+            .filter(|gi| gi.trace.gathers())
+            .map_or(0, |gi| gi.trace.layout.temporal)
     }
 
     /// The next frame traces the diffuse cones afresh, without the temporal history: a camera
