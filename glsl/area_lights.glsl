@@ -25,6 +25,16 @@ const uint MAX_AREA_CORNERS = 512u;
 layout(set = 0, binding = 5, std140) uniform AreaPolygons { AreaPolygon area_polygons[MAX_AREA_CORNERS]; };
 // Polygon corners counter-clockwise seen from the front (xyz); a sphere's centre and radius.
 layout(set = 0, binding = 6, std140) uniform AreaVertices { vec4 area_vertices[MAX_AREA_CORNERS]; };
+// A light's polygons' edges, each once (gpu.rs: GpuAreaEdge), its corners named by the first
+// index of their position.
+const uint NO_POLYGON = 0xffffffffu;
+struct AreaEdge {
+    uint a;       // corners
+    uint b;
+    uint left;    // the polygon it runs a to b in
+    uint right;   // the one it runs b to a in (NO_POLYGON: none)
+};
+layout(set = 0, binding = 9, std140) uniform AreaEdges { AreaEdge area_edges[MAX_AREA_CORNERS]; };
 
 // The LTC table (src/render/ltc.rs): per roughness (rows) and sqrt(1 - n.v) (within a row), on a
 // square grid whose first and last cells sit at 0 and 1, two vec4s: the inverse matrix's
@@ -202,6 +212,71 @@ mat3 area_frame(vec3 n, vec3 v) {
     return transpose(mat3(t, b, n));
 }
 
+// How polygon `index` counts from p: +1 seen from its front, -1 from its back when the light
+// is two-sided, else 0.
+float polygon_weight(uint index, vec3 p, bool two_sided) {
+    if (index == NO_POLYGON) return 0.0;
+    float side = area_side(area_polygons[index], p);
+    return side < 0.0 && !two_sided ? 0.0 : side;
+}
+
+// The clipped sums of a light's silhouette, the loops its edges of nonzero weight make
+// (edges `first` to `first + count`, at most 32): false when the weights differ in size (an
+// open two-sided mesh), for the sum over polygons to do instead.
+bool silhouette_form_factors(uint first, uint count, vec3 p, bool two_sided, mat3 local_a,
+                             mat3 local_b, out vec2 sums) {
+    sums = vec2(0.0);
+    uint live = 0u;   // bit e: edge e is on the silhouette
+    uint flip = 0u;   // and runs from its corner b to a
+    float size = 0.0;
+    bool uniform_size = true;
+    for (uint e = 0u; e < count; e++) {
+        AreaEdge edge = area_edges[first + e];
+        float w = polygon_weight(edge.left, p, two_sided) - polygon_weight(edge.right, p, two_sided);
+        if (w == 0.0) continue;
+        live |= 1u << e;
+        flip |= w < 0.0 ? 1u << e : 0u;
+        uniform_size = uniform_size && (size == 0.0 || size == abs(w));
+        size = abs(w);
+    }
+    if (!uniform_size) return false;
+    uint left = live;
+    // Each pass walks one loop: from an unused edge's start, to the edge that starts where the
+    // last one ended, until back at the start.
+    for (uint loop = 0u; loop < 32u && left != 0u; loop++) {
+        uint e = uint(findLSB(left));
+        left &= ~(1u << e);
+        AreaEdge edge = area_edges[first + e];
+        bool back = (flip & (1u << e)) != 0u;
+        uint start = back ? edge.b : edge.a;
+        uint end = back ? edge.a : edge.b;
+        vec3 d = area_vertices[start].xyz - p;
+        Clip a = clip_begin(local_a * d);
+        Clip b = clip_begin(local_b * d);
+        for (uint step = 0u; step < 32u && end != start; step++) {
+            d = area_vertices[end].xyz - p;
+            clip_edge(a, local_a * d);
+            clip_edge(b, local_b * d);
+            uint next = 32u;
+            for (uint m = left; m != 0u; m &= m - 1u) {
+                uint k = uint(findLSB(m));
+                AreaEdge ek = area_edges[first + k];
+                bool kb = (flip & (1u << k)) != 0u;
+                if ((kb ? ek.b : ek.a) == end) {
+                    next = k;
+                    end = kb ? ek.a : ek.b;
+                    break;
+                }
+            }
+            if (next == 32u) return false;  // an open chain: not a silhouette after all
+            left &= ~(1u << next);
+        }
+        // Seen from p a front face turns clockwise around the lobe's axis: negative sums.
+        sums -= size * vec2(clip_end(a), clip_end(b));
+    }
+    return true;
+}
+
 // The form factors of one area light's polygons from p for two lobes (0 to 1; pi Le times one
 // is the irradiance the lobe gathers), with `local_a` and `local_b` the maps from world
 // offsets to the frames whose z are the lobes' axes (area_frame for the diffuse lobe, the
@@ -211,6 +286,18 @@ vec2 area_form_factors(Light light, vec3 p, mat3 local_a, mat3 local_b) {
     uint count = uint(light.cone.y);
     bool two_sided = light.radiance.w > 0.5;
     vec2 f = vec2(0.0);
+    // Where polygons share edges (a box's faces), an edge counts by the difference of its two
+    // polygons' weights: between two faces seen from the front it cancels, so the sum needs
+    // only the outline of the faces in view (a box: four to six edges instead of up to twelve).
+    // Those edges are chained into closed loops and clipped as the polygons would be.
+    uint edges = uint(light.direction_range.z);
+    if (edges > 0u && edges <= 32u) {
+        vec2 g;
+        if (silhouette_form_factors(uint(light.direction_range.y), edges, p, two_sided,
+                                    local_a, local_b, g)) {
+            return max(g, vec2(0.0)) / (2.0 * PI);
+        }
+    }
     for (uint i = 0u; i < count; i++) {
         AreaPolygon poly = area_polygons[first + i];
         float side = area_side(poly, p);

@@ -379,11 +379,20 @@ fn ray_hits(eye: DVec3, p: DVec3, tris: &[[DVec3; 3]]) -> bool {
 /// 0.8 Le F (`exact`); returns the worst relative error, where the exact value is over 1% of
 /// its maximum (elsewhere the error relative to that maximum), and how many pixels are lit.
 fn form_factor_error(tris: &[[Vec3; 3]], exact: &dyn Fn(DVec3) -> f64) -> (f64, usize, f64) {
+    form_factor_error_sided(tris, exact, false)
+}
+
+/// [`form_factor_error`] for an emitter that is two-sided or not.
+fn form_factor_error_sided(
+    tris: &[[Vec3; 3]],
+    exact: &dyn Fn(DVec3) -> f64,
+    two_sided: bool,
+) -> (f64, usize, f64) {
     let le = 10.0f32;
     let mut s = empty_scene();
     let white = lambert(&mut s, Vec3::splat(0.8));
     floor(&mut s, 3.0, white);
-    let m = emitter(&mut s, Vec3::ZERO, Vec3::splat(le), false);
+    let m = emitter(&mut s, Vec3::ZERO, Vec3::splat(le), two_sided);
     mesh(&mut s, tris, m);
     top_camera(&mut s, HEIGHT, FOV);
     let img = render(&s, direct_settings());
@@ -481,6 +490,77 @@ fn a_quad_a_triangle_and_a_disc_give_the_floor_their_exact_form_factors() {
         eprintln!("{name}: worst {worst:.5} over {lit} pixels, dark {dark:.2e}");
         assert!(lit > 1000, "{name}: only {lit} lit pixels");
         // The disc is a 64-gon: 0.16% less area than the disc.
+        assert!(worst < 0.01, "{name}: a pixel off by {worst}");
+        assert!(
+            dark < 1e-3,
+            "{name}: a dark pixel off by {dark} of the brightest"
+        );
+    }
+}
+
+/// The faces of a cube of side `side` centred at `c` and turned by `turn`, each counter-clockwise
+/// seen from outside.
+fn cube_faces(c: Vec3, side: f32, turn: glam::Quat) -> Vec<[Vec3; 4]> {
+    let h = 0.5 * side;
+    let mut faces = Vec::new();
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let n = Vec3::AXES[axis] * sign;
+            let (u, v) = (Vec3::AXES[(axis + 1) % 3], Vec3::AXES[(axis + 2) % 3]);
+            let (u, v) = if sign > 0.0 { (u, v) } else { (v, u) };
+            let f = n * h;
+            faces.push(
+                [
+                    f - h * u - h * v,
+                    f + h * u - h * v,
+                    f + h * u + h * v,
+                    f - h * u + h * v,
+                ]
+                .map(|p| c + turn * p),
+            );
+        }
+    }
+    faces
+}
+
+#[test]
+fn a_box_gives_the_floor_the_sum_of_its_faces_form_factors() {
+    // A closed emitter is summed over the outline of the faces a point sees (the edges two
+    // seen faces share cancel), chained into loops and clipped to the horizon: the floor must
+    // get what the faces give one by one. A turned cube above the floor (no clipping), one
+    // dipping 8 cm into it (every loop clipped), and a two-sided one (its faces count from
+    // both sides).
+    let turn = glam::Quat::from_euler(glam::EulerRot::XYZ, 0.5, 0.7, 0.2);
+    let reach = 0.5 * 0.4 * 3f32.sqrt();
+    let cases = [
+        ("above", Vec3::new(0.1, reach + 0.15, 0.0), false),
+        ("dipping", Vec3::new(0.1, reach - 0.08, 0.0), false),
+        ("two-sided", Vec3::new(0.1, reach + 0.15, 0.0), true),
+    ];
+    for (name, c, two_sided) in cases {
+        let faces = cube_faces(c, 0.4, turn);
+        let tris: Vec<[Vec3; 3]> = faces.iter().flat_map(|q| quad_tris(*q)).collect();
+        let polys: Vec<Vec<DVec3>> = faces
+            .iter()
+            .map(|q| q.iter().map(|p| p.as_dvec3()).collect())
+            .collect();
+        let exact = move |p: DVec3| -> f64 {
+            polys
+                .iter()
+                .map(|q| {
+                    let back: Vec<DVec3> = q.iter().rev().copied().collect();
+                    exact_form_factor(p, q)
+                        + if two_sided {
+                            exact_form_factor(p, &back)
+                        } else {
+                            0.0
+                        }
+                })
+                .sum()
+        };
+        let (worst, lit, dark) = form_factor_error_sided(&tris, &exact, two_sided);
+        eprintln!("{name}: worst {worst:.5} over {lit} pixels, dark {dark:.2e}");
+        assert!(lit > 1000, "{name}: only {lit} lit pixels");
         assert!(worst < 0.01, "{name}: a pixel off by {worst}");
         assert!(
             dark < 1e-3,

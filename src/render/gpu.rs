@@ -1,7 +1,8 @@
 //! CPU mirrors of the GPU structs in glsl/common.glsl (std140 / std430 layouts).
 
 use crate::scene::{AlphaMode, Light, LightKind, Material, TexRef};
-use glam::{Mat4, Vec4};
+use glam::{Mat4, Vec3, Vec4};
+use std::collections::HashMap;
 
 /// Reinterprets plain-old-data as bytes for upload.
 pub fn as_bytes<T: Copy>(data: &[T]) -> &[u8] {
@@ -132,21 +133,25 @@ impl GpuLight {
         }
     }
 
-    /// An area light whose polygons start at `first_polygon` of the area tables.
+    /// An area light whose polygons and edges are `range` of the area tables.
     pub fn from_area(
         l: &super::area_lights::AreaLight,
-        first_polygon: u32,
-        polygons: u32,
+        range: &AreaRange,
         first_view: u32,
         views: u32,
     ) -> Self {
         GpuLight {
             position_type: l.position.extend(LIGHT_AREA),
-            direction_range: Vec4::new(l.apparent_radius(), 0.0, 0.0, l.radius),
+            direction_range: Vec4::new(
+                l.apparent_radius(),
+                range.first_edge as f32,
+                range.edges as f32,
+                l.radius,
+            ),
             radiance: l.emission.extend(if l.two_sided { 1.0 } else { 0.0 }),
             cone: Vec4::new(
-                first_polygon as f32,
-                polygons as f32,
+                range.first_polygon as f32,
+                range.polygons as f32,
                 first_view as f32,
                 views as f32,
             ),
@@ -164,17 +169,95 @@ pub struct GpuAreaPolygon {
     pub range: [u32; 4],
 }
 
-/// The area lights' polygons and corners (a sphere: one corner, its centre and radius), in
-/// light order.
-pub fn area_tables(
-    lights: &[super::area_lights::AreaLight],
-) -> (Vec<(u32, u32)>, Vec<GpuAreaPolygon>, Vec<Vec4>) {
+/// glsl/area_lights.glsl: AreaEdge. An edge of a light's outlines between corners `a` and
+/// `b` (indices into the corners), running a to b in polygon `left` and b to a in polygon
+/// `right` (NO_POLYGON when no other polygon has it).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct GpuAreaEdge {
+    pub a: u32,
+    pub b: u32,
+    pub left: u32,
+    pub right: u32,
+}
+
+pub const NO_POLYGON: u32 = u32::MAX;
+
+/// Where one area light's entries lie in the area tables.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct AreaRange {
+    pub first_polygon: u32,
+    pub polygons: u32,
+    pub first_edge: u32,
+    pub edges: u32,
+}
+
+/// The area lights' tables, in light order.
+#[derive(Clone, Debug, Default)]
+pub struct AreaTables {
+    pub ranges: Vec<AreaRange>,
+    pub polygons: Vec<GpuAreaPolygon>,
+    /// Polygon corners; a sphere's single entry is its centre and radius.
+    pub vertices: Vec<Vec4>,
+    /// The polygons' edges, each once: where two polygons of a light share an edge (a box's
+    /// faces), a point that sees both from the front has its terms cancel, so the edges
+    /// between a face it sees and one it does not (the silhouette) are all it sums.
+    pub edges: Vec<GpuAreaEdge>,
+}
+
+/// The edges of polygons `polys`, whose corners start at `first_corner` and polygons at
+/// `first_polygon`, each shared edge once (corners equal bit for bit: the outlines come from
+/// welded points, placed by the same transform). A corner several polygons share is named by
+/// its first index, so the shader chains edges by index.
+fn polygon_edges(
+    polys: &[super::area_lights::Polygon],
+    first_corner: u32,
+    first_polygon: u32,
+) -> Vec<GpuAreaEdge> {
+    let key = |v: Vec3| v.to_array().map(f32::to_bits);
+    let mut edges: Vec<GpuAreaEdge> = Vec::new();
+    let mut open: HashMap<([u32; 3], [u32; 3]), usize> = HashMap::new();
+    let mut names: HashMap<[u32; 3], u32> = HashMap::new();
+    let mut corner = first_corner;
+    for (i, p) in polys.iter().enumerate() {
+        let n = p.vertices.len();
+        for k in 0..n {
+            let (va, vb) = (p.vertices[k], p.vertices[(k + 1) % n]);
+            let a = *names.entry(key(va)).or_insert(corner + k as u32);
+            let b = *names
+                .entry(key(vb))
+                .or_insert(corner + ((k + 1) % n) as u32);
+            let polygon = first_polygon + i as u32;
+            // Its twin runs b to a in a polygon before this one.
+            if let Some(e) = open.remove(&(key(vb), key(va))) {
+                edges[e].right = polygon;
+                continue;
+            }
+            open.insert((key(va), key(vb)), edges.len());
+            edges.push(GpuAreaEdge {
+                a,
+                b,
+                left: polygon,
+                right: NO_POLYGON,
+            });
+        }
+        corner += n as u32;
+    }
+    edges
+}
+
+/// The area lights' polygons, corners and edges (a sphere: one corner, its centre and radius,
+/// and no edges), in light order.
+pub fn area_tables(lights: &[super::area_lights::AreaLight]) -> AreaTables {
     use super::area_lights::Shape;
-    let (mut ranges, mut polygons, mut vertices) = (Vec::new(), Vec::new(), Vec::new());
+    let mut t = AreaTables::default();
     for l in lights {
-        let first = polygons.len() as u32;
+        let first = t.polygons.len() as u32;
+        let first_edge = t.edges.len() as u32;
+        let (polygons, vertices) = (&mut t.polygons, &mut t.vertices);
         match &l.shape {
             Shape::Polygons(polys) => {
+                let edges = polygon_edges(polys, vertices.len() as u32, first);
                 for p in polys {
                     polygons.push(GpuAreaPolygon {
                         plane: p.normal.extend(p.normal.dot(p.vertices[0])),
@@ -187,6 +270,7 @@ pub fn area_tables(
                     });
                     vertices.extend(p.vertices.iter().map(|v| v.extend(1.0)));
                 }
+                t.edges.extend(edges);
             }
             Shape::Sphere { centre, radius } => {
                 polygons.push(GpuAreaPolygon {
@@ -196,9 +280,14 @@ pub fn area_tables(
                 vertices.push(centre.extend(*radius));
             }
         }
-        ranges.push((first, polygons.len() as u32 - first));
+        t.ranges.push(AreaRange {
+            first_polygon: first,
+            polygons: t.polygons.len() as u32 - first,
+            first_edge,
+            edges: t.edges.len() as u32 - first_edge,
+        });
     }
-    (ranges, polygons, vertices)
+    t
 }
 
 #[repr(C)]
@@ -307,6 +396,54 @@ mod tests {
             &fields!(GpuAreaPolygon { plane, range }),
             std::mem::size_of::<GpuAreaPolygon>(),
         );
+        same_layout(
+            &glsl_struct("deferred_lighting.comp", "AreaEdge"),
+            &fields!(GpuAreaEdge { a, b, left, right }),
+            std::mem::size_of::<GpuAreaEdge>(),
+        );
+    }
+
+    fn square(c: Vec3, u: Vec3, v: Vec3) -> super::super::area_lights::Polygon {
+        super::super::area_lights::Polygon {
+            vertices: vec![c - u - v, c + u - v, c + u + v, c - u + v],
+            normal: u.cross(v).normalize(),
+        }
+    }
+
+    #[test]
+    fn a_box_has_twelve_shared_edges_and_a_quad_four_of_its_own() {
+        let quad = [square(Vec3::ZERO, Vec3::X, Vec3::Z)];
+        let edges = polygon_edges(&quad, 10, 3);
+        assert_eq!(edges.len(), 4);
+        assert!(edges.iter().all(|e| e.left == 3 && e.right == NO_POLYGON));
+        assert_eq!(
+            edges.iter().map(|e| (e.a, e.b)).collect::<Vec<_>>(),
+            [(10, 11), (11, 12), (12, 13), (13, 10)]
+        );
+        let faces: Vec<_> = (0..3)
+            .flat_map(|axis| {
+                [-1.0f32, 1.0].map(|sign| {
+                    let n = Vec3::AXES[axis] * sign;
+                    let (u, v) = (Vec3::AXES[(axis + 1) % 3], Vec3::AXES[(axis + 2) % 3]);
+                    let (u, v) = if sign > 0.0 { (u, v) } else { (v, u) };
+                    square(n, u, v)
+                })
+            })
+            .collect();
+        let edges = polygon_edges(&faces, 0, 0);
+        assert_eq!(edges.len(), 12);
+        assert!(edges
+            .iter()
+            .all(|e| e.right != NO_POLYGON && e.left != e.right));
+        // Eight corners, each named once, three edges at each.
+        let mut names: Vec<u32> = edges.iter().flat_map(|e| [e.a, e.b]).collect();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), 8);
+        for n in names {
+            let at = edges.iter().filter(|e| e.a == n || e.b == n).count();
+            assert_eq!(at, 3, "corner {n}");
+        }
     }
 
     #[test]

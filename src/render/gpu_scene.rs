@@ -3,7 +3,7 @@
 
 use super::area_lights::{AreaLight, MAX_AREA_CORNERS};
 use super::gpu::{
-    area_tables, as_bytes, GpuAreaPolygon, GpuLight, GpuMaterial, ShadowView, MAX_LIGHTS,
+    area_tables, as_bytes, AreaTables, GpuLight, GpuMaterial, ShadowView, MAX_LIGHTS,
     MAX_SHADOW_VIEWS,
 };
 use super::shadows::{light_views, soft_shadow_texels, LightViews};
@@ -12,7 +12,6 @@ use crate::vk::{
     vk, Access, Buffer, Context, Graph, Image, ImageDesc, ResourceStates, Sampler, VkError,
     VkResult,
 };
-use glam::Vec4;
 use gpu_allocator::MemoryLocation;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -45,6 +44,7 @@ pub struct LightBuffers {
     pub shadow_views: Buffer,
     pub area_polygons: Buffer,
     pub area_vertices: Buffer,
+    pub area_edges: Buffer,
     pub ltc: Buffer,
 }
 
@@ -91,13 +91,19 @@ impl LightBuffers {
             area_polygons: Buffer::with_data(
                 ctx,
                 "area polygons",
-                as_bytes(&full(&table.area_polygons, MAX_AREA_CORNERS)),
+                as_bytes(&full(&table.area.polygons, MAX_AREA_CORNERS)),
                 uniform,
             )?,
             area_vertices: Buffer::with_data(
                 ctx,
                 "area vertices",
-                as_bytes(&full(&table.area_vertices, MAX_AREA_CORNERS)),
+                as_bytes(&full(&table.area.vertices, MAX_AREA_CORNERS)),
+                uniform,
+            )?,
+            area_edges: Buffer::with_data(
+                ctx,
+                "area edges",
+                as_bytes(&full(&table.area.edges, MAX_AREA_CORNERS)),
                 uniform,
             )?,
             ltc: Buffer::with_data(ctx, "LTC table", as_bytes(super::ltc::gpu_table()), storage)?,
@@ -113,9 +119,12 @@ impl LightBuffers {
         if !views.is_empty() {
             self.shadow_views.write(0, as_bytes(&views));
         }
-        if !table.area_polygons.is_empty() {
-            self.area_polygons.write(0, as_bytes(&table.area_polygons));
-            self.area_vertices.write(0, as_bytes(&table.area_vertices));
+        if !table.area.polygons.is_empty() {
+            self.area_polygons.write(0, as_bytes(&table.area.polygons));
+            self.area_vertices.write(0, as_bytes(&table.area.vertices));
+        }
+        if !table.area.edges.is_empty() {
+            self.area_edges.write(0, as_bytes(&table.area.edges));
         }
     }
 }
@@ -124,8 +133,7 @@ impl LightBuffers {
 pub struct LightTable {
     pub views: Vec<LightViews>,
     pub lights: Vec<GpuLight>,
-    pub area_polygons: Vec<GpuAreaPolygon>,
-    pub area_vertices: Vec<Vec4>,
+    pub area: AreaTables,
 }
 
 impl LightTable {
@@ -163,7 +171,7 @@ pub fn light_table(
     for v in &mut area_views {
         v.first += first;
     }
-    let (ranges, area_polygons, area_vertices) = area_tables(area);
+    let tables = area_tables(area);
     let gpu = lights
         .iter()
         .zip(&views)
@@ -171,16 +179,15 @@ pub fn light_table(
         .chain(
             area.iter()
                 .zip(&area_views)
-                .zip(ranges)
-                .map(|((l, v), r)| GpuLight::from_area(l, r.0, r.1, v.first, v.views.len() as u32)),
+                .zip(&tables.ranges)
+                .map(|((l, v), r)| GpuLight::from_area(l, r, v.first, v.views.len() as u32)),
         )
         .collect();
     views.extend(area_views);
     LightTable {
         views,
         lights: gpu,
-        area_polygons,
-        area_vertices,
+        area: tables,
     }
 }
 

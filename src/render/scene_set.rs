@@ -32,6 +32,7 @@ impl SceneBindings {
             .uniform("ShadowViews", &gpu.lights.shadow_views)
             .uniform("AreaPolygons", &gpu.lights.area_polygons)
             .uniform("AreaVertices", &gpu.lights.area_vertices)
+            .uniform("AreaEdges", &gpu.lights.area_edges)
             .buffer("LtcTable", &gpu.lights.ltc, Usage::Read)
             .sampled(
                 "environment_map",
