@@ -50,4 +50,38 @@ vec3 brdf(Surface s, vec3 n, vec3 v, vec3 l) {
     return mix(dielectric, metal, s.metallic);
 }
 
+// Karis' analytic fit of the split-sum environment BRDF: scale and bias of f0.
+vec2 env_brdf(float roughness, float n_dot_v) {
+    const vec4 c0 = vec4(-1.0, -0.0275, -0.572, 0.022);
+    const vec4 c1 = vec4(1.0, 0.0425, 1.04, -0.04);
+    vec4 r = roughness * c0 + c1;
+    float a004 = min(r.x * r.x, exp2(-9.28 * n_dot_v)) * r.x + r.y;
+    return vec2(-1.04, 1.04) * a004 + r.zw;
+}
+
+// What a surface reflects of light from all around (the cones', the environment's): the share
+// of the irradiance its diffuse lobe sends to the eye (albedo / pi, less what the specular
+// lobe takes), and the specular lobe's reflectance by the split sum (of the radiance seen
+// along the reflection, prefiltered to the lobe: the specular cone's).
+void reflectances(vec4 albedo, float roughness, vec4 spec, float n_dot_v,
+                  out vec3 diffuse_weight, out vec3 spec_reflectance) {
+    vec3 base = albedo.rgb;
+    float metallic = albedo.a;
+    vec3 f0 = mix(min(vec3(0.04) * spec.rgb, vec3(1.0)) * spec.a, base, metallic);
+    vec3 f90 = vec3(mix(spec.a, 1.0, metallic));
+    vec2 ab = env_brdf(roughness, n_dot_v);
+    spec_reflectance = f0 * ab.x + f90 * ab.y;
+    diffuse_weight = (1.0 - metallic) * (1.0 - spec_reflectance) * base / PI;
+}
+
+// The specular cone's tangent of half aperture for a surface's roughness.
+float specular_aperture(float roughness) {
+#ifdef PAPER
+    return clamp(tan(0.5 * PI * roughness), 0.0174533, PI);
+#else
+    // The GGX lobe's half width at half maximum, doubled by reflection.
+    return clamp(1.29 * roughness * roughness, 0.02, 1.0);
+#endif
+}
+
 #endif

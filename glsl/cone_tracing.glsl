@@ -8,6 +8,7 @@
 
 #include "aniso_mip.glsl"
 #include "environment.glsl"
+#include "brdf.glsl"
 
 #if CONE_FULL_RES
 layout(set = CONE_SET, binding = 0) uniform sampler3D radiance_tex;
@@ -357,16 +358,6 @@ Gather diffuse_cones(vec3 origin, mat3 frame_n, float t0, uint first, uint strid
         g.weight += frame.cones[i].w;
     }
     return g;
-}
-
-// The specular cone's tangent of half aperture for a surface's roughness.
-float specular_aperture(float roughness) {
-#ifdef PAPER
-    return clamp(tan(0.5 * PI * roughness), 0.0174533, PI);
-#else
-    // The GGX lobe's half width at half maximum, doubled by reflection.
-    return clamp(1.29 * roughness * roughness, 0.02, 1.0);
-#endif
 }
 
 // The reduced-resolution trace traces the specular cone per block too where it is at least this

@@ -1,7 +1,8 @@
 #version 450
 // Deferred direct lighting: punctual lights with filtered shadow maps, emissive surfaces as area
 // lights (area_lights.glsl) with shadows softened by their size, plus emission, written as
-// linear radiance (RGBA32F).
+// linear radiance (RGBA32F). Where no cone traces the environment (--mode direct), its light
+// too, unoccluded, as a glTF viewer's image-based lighting: the cones take it otherwise.
 #include "common.glsl"
 #include "brdf.glsl"
 #include "lights.glsl"
@@ -66,6 +67,14 @@ void main() {
         if (n_dot_l <= 0.0 || dot(geo, l) <= 0.0 || all(equal(e, vec3(0.0)))) continue;
         float vis = shadow_visibility(light, p, geo, shadow_map, area_shadow_map);
         radiance += brdf(s, n, v, l) * e * n_dot_l * vis;
+    }
+    if (environment_lights_directly()) {
+        vec3 diffuse_weight;
+        vec3 spec_reflectance;
+        reflectances(albedo, s.roughness, spec, clamp(dot(n, v), 1e-4, 1.0), diffuse_weight,
+                     spec_reflectance);
+        radiance += diffuse_weight * environment_irradiance(n) +
+                    spec_reflectance * environment_radiance(reflect(-v, n), specular_aperture(s.roughness));
     }
     imageStore(out_radiance, px, vec4(radiance, 1.0));
 }

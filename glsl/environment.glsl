@@ -9,6 +9,9 @@ layout(set = 0, binding = 8) uniform sampler2D environment_map;
 
 bool has_environment() { return frame.env.w > 0.0; }
 
+// No cone traces the environment (--mode direct): the lighting pass lights by it, unoccluded.
+bool environment_lights_directly() { return frame.env.w > 1.5; }
+
 // The image coordinates of world direction d: u = 0.5 + atan2(d.x, -d.z) / 2 pi,
 // v = acos(d.y) / pi, after turning d back by the environment's turn.
 vec2 environment_uv(vec3 d) {
@@ -27,6 +30,21 @@ vec3 environment_radiance(vec3 d, float tan_half) {
     float cone = 2.0 * PI * (1.0 - cos(atan(tan_half)));
     float lod = 0.5 * log2(max(cone / texel, 1.0));
     return textureLod(environment_map, environment_uv(d), lod).rgb * frame.env.x;
+}
+
+// The irradiance the environment gives a surface of normal n, unoccluded: seven cones of 30
+// degrees' half angle, one along n and six 60 degrees from it, weighted by their cosines so
+// that a uniform environment gives pi Le exactly.
+vec3 environment_irradiance(vec3 n) {
+    vec3 t = normalize(cross(n, abs(n.y) < 0.99 ? vec3(0.0, 1.0, 0.0) : vec3(1.0, 0.0, 0.0)));
+    vec3 b = cross(n, t);
+    const float TAN_30 = 0.57735027;
+    vec3 sum = environment_radiance(n, TAN_30);
+    for (int k = 0; k < 6; k++) {
+        float a = float(k) * (PI / 3.0);
+        sum += 0.5 * environment_radiance(0.5 * n + 0.8660254 * (cos(a) * t + sin(a) * b), TAN_30);
+    }
+    return sum * (PI / 4.0);
 }
 
 #endif

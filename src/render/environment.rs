@@ -29,7 +29,12 @@ pub fn texel_scale(env: Option<&Environment>) -> f32 {
 }
 
 /// The frame uniform: strength (times the texel scale), the turn's cosine and sine, 1 when
-/// there is an environment.
+/// there is an environment (2 when no cone traces it and the lighting pass lights by it:
+/// [`LIGHTS_DIRECTLY`]).
+/// The uniform's w when the lighting pass lights by the environment (glsl/environment.glsl:
+/// environment_lights_directly).
+pub const LIGHTS_DIRECTLY: f32 = 2.0;
+
 pub fn uniform(env: Option<&Environment>) -> Vec4 {
     match env {
         Some(e) => Vec4::new(

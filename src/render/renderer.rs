@@ -445,6 +445,16 @@ impl Renderer {
         })
     }
 
+    /// The environment's frame uniform: without cones (no voxel passes: --mode direct) the
+    /// lighting pass lights by it.
+    fn environment_uniform(&self) -> Vec4 {
+        let mut env = self.environment;
+        if env.w > 0.0 && self.gi.is_none() {
+            env.w = super::environment::LIGHTS_DIRECTLY;
+        }
+        env
+    }
+
     /// The frame's uniforms: the camera, the lights' count, the shadow and voxel settings.
     fn view_proj(&self) -> (Mat4, Mat4) {
         let (w, h) = (self.settings.width, self.settings.height);
@@ -494,7 +504,7 @@ impl Renderer {
                 super::shadows::soft_shadow_texels(self.settings.area_shadow_resolution) as f32,
                 0.0,
             ),
-            env: self.environment,
+            env: self.environment_uniform(),
             ..Default::default()
         };
         if let Some(gi) = &self.gi {
