@@ -289,9 +289,14 @@ vec2 area_form_factors(Light light, vec3 p, mat3 local_a, mat3 local_b) {
     // Where polygons share edges (a box's faces), an edge counts by the difference of its two
     // polygons' weights: between two faces seen from the front it cancels, so the sum needs
     // only the outline of the faces in view (a box: four to six edges instead of up to twelve).
-    // Those edges are chained into closed loops and clipped as the polygons would be.
+    // Those edges are chained into closed loops and clipped as the polygons would be. Only from
+    // outside the light's bounding sphere: there the light lies within a hemisphere, so its
+    // outline bounds what it covers. From inside a closed light (a furnace) every face is seen
+    // from the front, every edge cancels, and the outline would say nothing is covered.
     uint edges = uint(light.direction_range.z);
-    if (edges > 0u && edges <= 32u) {
+    vec3 centre = light.position_type.xyz - p;
+    float reach = light.direction_range.w;
+    if (edges > 0u && edges <= 32u && dot(centre, centre) > reach * reach) {
         vec2 g;
         if (silhouette_form_factors(uint(light.direction_range.y), edges, p, two_sided,
                                     local_a, local_b, g)) {

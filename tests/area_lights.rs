@@ -570,6 +570,54 @@ fn a_box_gives_the_floor_the_sum_of_its_faces_form_factors() {
 }
 
 #[test]
+fn a_floor_inside_a_closed_emitter_sees_it_all_around() {
+    // Inside a box whose faces emit inwards every face is seen from the front, so every edge
+    // of its outline cancels: the outline cannot stand for the faces there, and the floor must
+    // still get the whole hemisphere's light, 0.8 Le.
+    let le = 10.0f32;
+    let mut s = empty_scene();
+    let white = lambert(&mut s, Vec3::splat(0.8));
+    quad(
+        &mut s,
+        [
+            Vec3::new(-0.3, -0.3, 0.3),
+            Vec3::new(0.3, -0.3, 0.3),
+            Vec3::new(0.3, -0.3, -0.3),
+            Vec3::new(-0.3, -0.3, -0.3),
+        ],
+        white,
+    );
+    let m = emitter(&mut s, Vec3::ZERO, Vec3::splat(le), false);
+    let inward: Vec<[Vec3; 3]> = cube_faces(Vec3::ZERO, 2.0, glam::Quat::IDENTITY)
+        .iter()
+        .flat_map(|q| {
+            let mut q = *q;
+            q.reverse();
+            quad_tris(q)
+        })
+        .collect();
+    mesh(&mut s, &inward, m);
+    look_at(
+        &mut s,
+        Vec3::new(0.0, 0.5, 0.0),
+        Vec3::new(0.0, -0.3, -0.01),
+        30.0,
+    );
+    let img = render(&s, direct_settings());
+    let (mut lo, mut hi) = (f32::MAX, 0.0f32);
+    for p in &img.pixels {
+        lo = lo.min(p[0]);
+        hi = hi.max(p[0]);
+    }
+    eprintln!("floor inside the box: {lo} to {hi}, want {}", 0.8 * le);
+    assert!(
+        (lo - 0.8 * le).abs() < 0.01 * le && (hi - 0.8 * le).abs() < 0.01 * le,
+        "the floor {lo} to {hi} against {}",
+        0.8 * le
+    );
+}
+
+#[test]
 fn a_tilted_one_sided_quad_through_the_floor_lights_only_what_it_faces() {
     // A quad leaning 30 degrees from the vertical, facing -X and down, its lower edge 20 cm
     // under the floor: the floor in front sees the part above it (the horizon clips the rest),
