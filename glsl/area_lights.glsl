@@ -232,7 +232,8 @@ bool silhouette_form_factors(uint first, uint count, vec3 p, bool two_sided, mat
     bool uniform_size = true;
     for (uint e = 0u; e < count; e++) {
         AreaEdge edge = area_edges[first + e];
-        float w = polygon_weight(edge.left, p, two_sided) - polygon_weight(edge.right, p, two_sided);
+        float w = polygon_weight(edge.left, p, two_sided)
+                  - polygon_weight(edge.right, p, two_sided);
         if (w == 0.0) continue;
         live |= 1u << e;
         flip |= w < 0.0 ? 1u << e : 0u;

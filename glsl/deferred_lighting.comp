@@ -73,8 +73,9 @@ void main() {
         vec3 spec_reflectance;
         reflectances(albedo, s.roughness, spec, clamp(dot(n, v), 1e-4, 1.0), diffuse_weight,
                      spec_reflectance);
-        radiance += diffuse_weight * environment_irradiance(n) +
-                    spec_reflectance * environment_radiance(reflect(-v, n), specular_aperture(s.roughness));
+        vec3 r = reflect(-v, n);
+        radiance += diffuse_weight * environment_irradiance(n)
+                    + spec_reflectance * environment_radiance(r, specular_aperture(s.roughness));
     }
     imageStore(out_radiance, px, vec4(radiance, 1.0));
 }
