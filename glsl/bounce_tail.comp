@@ -16,7 +16,8 @@
 layout(local_size_x = 64) in;
 
 layout(push_constant) uniform Push {
-    uint last;  // 1: add the bounces not traced
+    uint last;    // 1: add the bounces not traced
+    uint before;  // 1: a bounce before this one left its light in ReflectedBefore
 } push;
 
 layout(set = 1, binding = 5, rgba16f) uniform image3D radiance;
@@ -24,6 +25,8 @@ layout(set = 1, binding = 5, rgba16f) uniform image3D radiance;
 // to the sides it fell on, as its direct light does.
 layout(set = 1, binding = 9, rgba8_snorm) uniform image3D emit_dir;
 layout(set = 1, binding = 11, std430) readonly buffer Reflected { uvec2 reflected[]; };
+// The bounce before's (the light of one order fewer), when there was one.
+layout(set = 1, binding = 13, std430) readonly buffer ReflectedBefore { uvec2 reflected_before[]; };
 layout(set = 1, binding = 12, std430) readonly buffer Reflectance { uint reflectance[8]; };
 
 // Lambda is kept at most 0.6 (2.5 times the last bounce): the series multiplies what the last
@@ -47,7 +50,14 @@ void main() {
     if (push.last != 0u) {
         float voxels = fixed_sum(6u);
         vec3 lambda = vec3(fixed_sum(0u), fixed_sum(2u), fixed_sum(4u)) / max(voxels, 1.0);
-        bounce /= 1.0 - min(lambda, vec3(MAX_LAMBDA));
+        // The series continues the order of light this bounce added, not the orders before
+        // it, which the bounces before traced: with three bounces the third's light is the
+        // second order plus the first again, and scaling all of it counted the first order
+        // twice over (sky-room 0.023 with two bounces, 0.078 with three, 0.136 with four).
+        vec3 before = push.before != 0u
+            ? vec3(unpackHalf2x16(reflected_before[i].x), unpackHalf2x16(reflected_before[i].y).x)
+            : vec3(0.0);
+        bounce = max(before + (bounce - before) / (1.0 - min(lambda, vec3(MAX_LAMBDA))), 0.0);
     }
     vec4 direct = imageLoad(radiance, c);
     if (side <= 1.0) {

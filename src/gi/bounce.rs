@@ -23,9 +23,12 @@ pub struct Bounce {
 
 /// What the gather leaves for bounce_tail.comp, which adds it to the voxels.
 struct Tail {
+    /// Instance k reads what bounce k (mod 2) reflected, and the bounce before's.
     pass: Pass,
-    /// Per listed voxel, the light it reflects (four half floats); the passes' sets hold it.
-    reflected: Buffer,
+    /// Per listed voxel, the light it reflects (four half floats), written by the bounces in
+    /// turn: the last bounce's tail follows only the order of light that bounce added (its
+    /// light less the bounce before's), since the orders before it are traced.
+    reflected: [Buffer; 2],
     /// Sums over the listed voxels of albedo times closed share, and their count (64-bit fixed
     /// point each).
     reflectance: Buffer,
@@ -107,13 +110,16 @@ impl Bounce {
         let buffers = if paper {
             None
         } else {
-            let reflected = Buffer::new(
-                ctx,
-                "bounce reflected",
-                8 * capacity,
-                vk::BufferUsageFlags::STORAGE_BUFFER,
-                MemoryLocation::GpuOnly,
-            )?;
+            let reflected = |k: usize| {
+                Buffer::new(
+                    ctx,
+                    &format!("bounce reflected {k}"),
+                    8 * capacity,
+                    vk::BufferUsageFlags::STORAGE_BUFFER,
+                    MemoryLocation::GpuOnly,
+                )
+            };
+            let reflected = [reflected(0)?, reflected(1)?];
             let reflectance = Buffer::new(
                 ctx,
                 "bounce reflectance",
@@ -130,40 +136,54 @@ impl Bounce {
             read_voxel_data(Bindings::new(), volumes).buffer("VoxelList", &list, Usage::ReadWrite),
             0,
         )?;
-        let gather = read_voxel_data(Bindings::new(), volumes)
-            .buffer("VoxelList", &list, Usage::Indirect)
-            .with(buffers.as_ref(), |t, (reflected, reflectance)| {
-                t.buffer("Reflected", reflected, Usage::Write).buffer(
-                    "Reflectance",
-                    reflectance,
-                    Usage::ReadWrite,
-                )
-            });
-        // --paper: the gather adds to the radiance itself.
-        let gather = if paper {
-            gather.image("radiance", &volumes.radiance, Usage::ReadWrite)
-        } else {
-            gather
+        let gather = |k: usize| {
+            let t = read_voxel_data(Bindings::new(), volumes)
+                .buffer("VoxelList", &list, Usage::Indirect)
+                .with(buffers.as_ref(), |t, (reflected, reflectance)| {
+                    t.buffer("Reflected", &reflected[k], Usage::Write).buffer(
+                        "Reflectance",
+                        reflectance,
+                        Usage::ReadWrite,
+                    )
+                });
+            // --paper: the gather adds to the radiance itself.
+            let t = if paper {
+                t.image("radiance", &volumes.radiance, Usage::ReadWrite)
+            } else {
+                t
+            };
+            cone_volumes(t, volumes, false)
         };
-        let gather = Pass::compute(
+        let instances = if paper { 1 } else { 2 };
+        let gather = Pass::new(
             ctx,
-            &variant("inject_bounce.comp", paper),
+            crate::vk::Program::Compute(&variant("inject_bounce.comp", paper)),
             &[scene],
-            cone_volumes(gather, volumes, false),
+            (0..instances).map(gather).collect(),
             0,
         )?;
         let tail = match buffers {
             Some((reflected, reflectance)) => {
-                let add = read_voxel_data(Bindings::new(), volumes)
-                    .image("radiance", &volumes.radiance, Usage::ReadWrite)
-                    .buffer("VoxelList", &list, Usage::Indirect)
-                    .buffer("Reflected", &reflected, Usage::Read)
-                    .buffer("Reflectance", &reflectance, Usage::Read)
-                    .with(volumes.emit_dir.as_ref(), |t, d| {
-                        t.image("emit_dir", d, Usage::ReadWrite)
-                    });
+                let add = |k: usize| {
+                    read_voxel_data(Bindings::new(), volumes)
+                        .image("radiance", &volumes.radiance, Usage::ReadWrite)
+                        .buffer("VoxelList", &list, Usage::Indirect)
+                        .buffer("Reflected", &reflected[k], Usage::Read)
+                        .buffer("ReflectedBefore", &reflected[1 - k], Usage::Read)
+                        .buffer("Reflectance", &reflectance, Usage::Read)
+                        .with(volumes.emit_dir.as_ref(), |t, d| {
+                            t.image("emit_dir", d, Usage::ReadWrite)
+                        })
+                };
+                let pass = Pass::new(
+                    ctx,
+                    crate::vk::Program::Compute("bounce_tail.comp"),
+                    &[scene],
+                    vec![add(0), add(1)],
+                    8,
+                )?;
                 Some(Tail {
-                    pass: Pass::compute(ctx, "bounce_tail.comp", &[scene], add, 4)?,
+                    pass,
                     reflected,
                     reflectance,
                     enabled: tail,
@@ -232,7 +252,7 @@ impl Bounce {
     pub fn buffers(&self) -> Vec<vk::Buffer> {
         let mut v = vec![self.list.raw, self.count.raw];
         if let Some(t) = &self.tail {
-            v.extend([t.reflected.raw, t.reflectance.raw]);
+            v.extend([t.reflected[0].raw, t.reflected[1].raw, t.reflectance.raw]);
         }
         v
     }
@@ -256,28 +276,40 @@ impl Bounce {
             });
     }
 
-    /// Each listed voxel gathers light from the directional volumes.
+    /// The instance bounce `bounce` (2 on) records with: which reflected buffer it writes.
+    fn instance(&self, bounce: u32) -> usize {
+        if self.tail.is_some() {
+            (bounce % 2) as usize
+        } else {
+            0
+        }
+    }
+
+    /// Each listed voxel gathers light from the directional volumes (bounce `bounce`, 2 on).
     pub fn record_gather(
         &self,
         ctx: &Context,
         g: &mut Graph,
         scene_set: vk::DescriptorSet,
+        bounce: u32,
         name: &str,
     ) {
         let p = &self.gather;
-        p.declare(g.pass(name), 0).record(|cmd| unsafe {
-            p.bind(&ctx.device, cmd, &[(0, scene_set)], 0);
+        let k = self.instance(bounce);
+        p.declare(g.pass(name), k).record(|cmd| unsafe {
+            p.bind(&ctx.device, cmd, &[(0, scene_set)], k);
             ctx.device.cmd_dispatch_indirect(cmd, self.list.raw, 0);
         });
     }
 
-    /// Adds what the gather left to the voxels' radiance; `last`: the last bounce, which also
-    /// adds the bounces not traced.
+    /// Adds what bounce `bounce` (2 on) gathered to the voxels' radiance; `last`: the last
+    /// bounce, which also adds the bounces not traced.
     pub fn record_add(
         &self,
         ctx: &Context,
         g: &mut Graph,
         scene_set: vk::DescriptorSet,
+        bounce: u32,
         last: bool,
         name: &str,
     ) {
@@ -285,11 +317,16 @@ impl Bounce {
         let Some(tail) = &self.tail else {
             return;
         };
-        let push = u32::from(last && tail.enabled);
+        // Whether a bounce before this one left its light in the other buffer.
+        let push: Vec<u8> = [u32::from(last && tail.enabled), u32::from(bounce >= 3)]
+            .iter()
+            .flat_map(|v| v.to_le_bytes())
+            .collect();
         let p = &tail.pass;
-        p.declare(g.pass(name), 0).record(|cmd| unsafe {
-            p.bind(d, cmd, &[(0, scene_set)], 0);
-            p.pipeline.push(d, cmd, &push.to_le_bytes());
+        let k = self.instance(bounce);
+        p.declare(g.pass(name), k).record(|cmd| unsafe {
+            p.bind(d, cmd, &[(0, scene_set)], k);
+            p.pipeline.push(d, cmd, &push);
             d.cmd_dispatch_indirect(cmd, self.list.raw, 0);
         });
     }

@@ -845,8 +845,10 @@ impl Gi {
             Step::VoxelListClear => bounce().record_list_clear(ctx, g, &name),
             Step::VoxelList => bounce().record_list(ctx, g, v, input.scene_set, &name),
             Step::SumsClear { .. } => bounce().record_sums_clear(ctx, g, &name),
-            Step::Gather { .. } => bounce().record_gather(ctx, g, input.scene_set, &name),
-            Step::Add { last, .. } => bounce().record_add(ctx, g, input.scene_set, last, &name),
+            Step::Gather { bounce: b } => bounce().record_gather(ctx, g, input.scene_set, b, &name),
+            Step::Add { bounce: b, last } => {
+                bounce().record_add(ctx, g, input.scene_set, b, last, &name)
+            }
         }
     }
 
