@@ -473,7 +473,7 @@ mod tests {
     #[test]
     fn reads_push_constants_and_leaves_out_what_a_variant_does_not_use() {
         assert_eq!(interface("gbuffer.vert").push_constants, 72);
-        assert_eq!(interface("bounce_tail.comp").push_constants, 4);
+        assert_eq!(interface("bounce_tail.comp").push_constants, 8);
         assert_eq!(interface("inject_radiance.comp").push_constants, 0);
         // The paper's light injection has no light-direction volume.
         assert!(interface("inject_radiance.comp")
