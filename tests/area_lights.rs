@@ -438,6 +438,24 @@ fn form_factor_error_sided(
     (worst, lit, dark_worst)
 }
 
+/// The emitter `tris` lights over a thousand floor pixels, each within 1% of `exact` (dark
+/// ones within 0.1% of the brightest).
+fn assert_form_factors(
+    name: &str,
+    tris: &[[Vec3; 3]],
+    exact: &dyn Fn(DVec3) -> f64,
+    two_sided: bool,
+) {
+    let (worst, lit, dark) = form_factor_error_sided(tris, exact, two_sided);
+    eprintln!("{name}: worst {worst:.5} over {lit} pixels, dark {dark:.2e}");
+    assert!(lit > 1000, "{name}: only {lit} lit pixels");
+    assert!(worst < 0.01, "{name}: a pixel off by {worst}");
+    assert!(
+        dark < 1e-3,
+        "{name}: a dark pixel off by {dark} of the brightest"
+    );
+}
+
 fn quad_tris(c: [Vec3; 4]) -> Vec<[Vec3; 3]> {
     vec![[c[0], c[1], c[2]], [c[0], c[2], c[3]]]
 }
@@ -486,15 +504,8 @@ fn a_quad_a_triangle_and_a_disc_give_the_floor_their_exact_form_factors() {
         ),
     ];
     for (name, tris, exact) in cases {
-        let (worst, lit, dark) = form_factor_error(&tris, &*exact);
-        eprintln!("{name}: worst {worst:.5} over {lit} pixels, dark {dark:.2e}");
-        assert!(lit > 1000, "{name}: only {lit} lit pixels");
         // The disc is a 64-gon: 0.16% less area than the disc.
-        assert!(worst < 0.01, "{name}: a pixel off by {worst}");
-        assert!(
-            dark < 1e-3,
-            "{name}: a dark pixel off by {dark} of the brightest"
-        );
+        assert_form_factors(name, &tris, &*exact, false);
     }
 }
 
@@ -558,14 +569,7 @@ fn a_box_gives_the_floor_the_sum_of_its_faces_form_factors() {
                 })
                 .sum()
         };
-        let (worst, lit, dark) = form_factor_error_sided(&tris, &exact, two_sided);
-        eprintln!("{name}: worst {worst:.5} over {lit} pixels, dark {dark:.2e}");
-        assert!(lit > 1000, "{name}: only {lit} lit pixels");
-        assert!(worst < 0.01, "{name}: a pixel off by {worst}");
-        assert!(
-            dark < 1e-3,
-            "{name}: a dark pixel off by {dark} of the brightest"
-        );
+        assert_form_factors(name, &tris, &exact, two_sided);
     }
 }
 

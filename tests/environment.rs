@@ -89,6 +89,26 @@ fn a_white_sphere_under_a_uniform_sky_is_the_sky() {
     assert!(rel < 0.02, "the sphere {centre} against the sky {le}");
 }
 
+/// A 2 m wall facing +X, seen from +X, under the image `sky` turned by `turn` degrees.
+fn wall_under(sky: EnvImage, turn: f32) -> Scene {
+    let mut s = empty_scene();
+    let m = lambert(&mut s, Vec3::splat(0.8));
+    let a = 1.0;
+    quad(
+        &mut s,
+        [
+            Vec3::new(0.0, -a, a),
+            Vec3::new(0.0, -a, -a),
+            Vec3::new(0.0, a, -a),
+            Vec3::new(0.0, a, a),
+        ],
+        m,
+    );
+    look_at(&mut s, Vec3::new(3.0, 0.0, 0.0), Vec3::ZERO, 20.0);
+    s.environment = Some(Environment::image(sky).turned(turn));
+    s
+}
+
 /// Without cones (`--mode direct`) the lighting pass lights by the environment, unoccluded:
 /// the white sphere under a uniform sky is the sky; a wall facing +X under a sky bright only
 /// on the +X side (no texel bright enough to be its sun) is lit as the path tracer lights it
@@ -124,23 +144,7 @@ fn direct_mode_lights_by_the_environment() {
                 }
             })
             .collect();
-        let mut s = empty_scene();
-        let m = lambert(&mut s, Vec3::splat(0.8));
-        let a = 1.0;
-        quad(
-            &mut s,
-            [
-                Vec3::new(0.0, -a, a),
-                Vec3::new(0.0, -a, -a),
-                Vec3::new(0.0, a, -a),
-                Vec3::new(0.0, a, a),
-            ],
-            m,
-        );
-        look_at(&mut s, Vec3::new(3.0, 0.0, 0.0), Vec3::ZERO, 20.0);
-        let sky = EnvImage::new("half.hdr", w, h, texels);
-        s.environment = Some(Environment::image(sky).turned(turn));
-        s
+        wall_under(EnvImage::new("half.hdr", w, h, texels), turn)
     };
     let mut st = settings(16);
     st.mode = Mode::Direct;
@@ -320,23 +324,7 @@ fn an_environment_image_lights_what_faces_its_texels() {
         let (w, h) = (64u32, 32u32);
         let mut texels = vec![Vec3::ZERO; (w * h) as usize];
         texels[(15 * w + 48) as usize] = Vec3::splat(1000.0);
-        let mut s = empty_scene();
-        let m = lambert(&mut s, Vec3::splat(0.8));
-        let a = 1.0;
-        quad(
-            &mut s,
-            [
-                Vec3::new(0.0, -a, a),
-                Vec3::new(0.0, -a, -a),
-                Vec3::new(0.0, a, -a),
-                Vec3::new(0.0, a, a),
-            ],
-            m,
-        );
-        look_at(&mut s, Vec3::new(3.0, 0.0, 0.0), Vec3::ZERO, 20.0);
-        let sky = EnvImage::new("one-texel.hdr", w, h, texels);
-        s.environment = Some(Environment::image(sky).turned(turn));
-        s
+        wall_under(EnvImage::new("one-texel.hdr", w, h, texels), turn)
     };
     let s = wall(0.0);
     let img = render(&s, settings(16));
