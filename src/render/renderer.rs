@@ -455,7 +455,7 @@ impl Renderer {
         env
     }
 
-    /// The frame's uniforms: the camera, the lights' count, the shadow and voxel settings.
+    /// The camera's view and projection (without the antialiasing's sub-pixel shift).
     fn view_proj(&self) -> (Mat4, Mat4) {
         let (w, h) = (self.settings.width, self.settings.height);
         let proj = Mat4::perspective_rh(
@@ -478,6 +478,7 @@ impl Renderer {
         Mat4::from_translation(glam::Vec3::new(2.0 * o.x / w, 2.0 * o.y / h, 0.0))
     }
 
+    /// The frame's uniforms: the camera, the lights' count, the shadow and voxel settings.
     fn uniforms(&self) -> FrameUniforms {
         let (w, h) = (self.settings.width, self.settings.height);
         let (view, proj) = self.view_proj();
