@@ -94,6 +94,7 @@ impl Bounce {
         volumes: &Volumes,
         paper: bool,
         tail: bool,
+        bounces: u32,
         capacity: u64,
     ) -> VkResult<Bounce> {
         let count = Buffer::readback(ctx, "voxel list count", 4)?;
@@ -110,11 +111,14 @@ impl Bounce {
         let buffers = if paper {
             None
         } else {
+            // The second is written from the third bounce on (odd bounces); with two it is
+            // bound but neither written nor read.
             let reflected = |k: usize| {
+                let entries = if k == 0 || bounces >= 3 { capacity } else { 1 };
                 Buffer::new(
                     ctx,
                     &format!("bounce reflected {k}"),
-                    8 * capacity,
+                    8 * entries,
                     vk::BufferUsageFlags::STORAGE_BUFFER,
                     MemoryLocation::GpuOnly,
                 )

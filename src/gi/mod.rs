@@ -698,6 +698,7 @@ impl Gi {
                 &volumes,
                 paper,
                 settings.tail,
+                settings.bounces,
                 capacity,
             )?)
         } else {
@@ -887,8 +888,16 @@ impl Gi {
         }
         self.bounce = None;
         let paper = self.settings.paper;
-        let tail = self.settings.tail;
-        self.bounce = Some(Bounce::new(ctx, scene_set, &self.volumes, paper, tail, to)?);
+        let (tail, bounces) = (self.settings.tail, self.settings.bounces);
+        self.bounce = Some(Bounce::new(
+            ctx,
+            scene_set,
+            &self.volumes,
+            paper,
+            tail,
+            bounces,
+            to,
+        )?);
         self.dirty = Dirty::ALL;
         Ok(ListFit::Grown { from, to })
     }
