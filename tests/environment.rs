@@ -89,6 +89,17 @@ fn a_white_sphere_under_a_uniform_sky_is_the_sky() {
     assert!(rel < 0.02, "the sphere {centre} against the sky {le}");
 }
 
+/// The path tracer's mean radiance over a 16 x 16 image of `s` at 64 spp.
+fn path_traced_mean(s: &Scene) -> Vec3 {
+    let st = ReferenceSettings {
+        width: 16,
+        height: 16,
+        spp: 64,
+        ..Default::default()
+    };
+    mean_where(&reference::render(s, &st), |_, _| true)
+}
+
 /// A 2 m wall facing +X, seen from +X, under the image `sky` turned by `turn` degrees.
 fn wall_under(sky: EnvImage, turn: f32) -> Scene {
     let mut s = empty_scene();
@@ -150,13 +161,7 @@ fn direct_mode_lights_by_the_environment() {
     st.mode = Mode::Direct;
     let s = wall(0.0);
     let got = mean_where(&render(&s, st.clone()), |_, _| true);
-    let rs = ReferenceSettings {
-        width: 16,
-        height: 16,
-        spp: 64,
-        ..Default::default()
-    };
-    let want = mean_where(&reference::render(&s, &rs), |_, _| true);
+    let want = path_traced_mean(&s);
     let turned = mean_where(&render(&wall(180.0), st), |_, _| true);
     eprintln!("direct mode: wall {got} against the path tracer's {want}, turned {turned}");
     // Measured 0.9% low (the seven cones' texels blur across the bright half's edges) and
@@ -328,13 +333,7 @@ fn an_environment_image_lights_what_faces_its_texels() {
     };
     let s = wall(0.0);
     let img = render(&s, settings(16));
-    let st = ReferenceSettings {
-        width: 16,
-        height: 16,
-        spp: 64,
-        ..Default::default()
-    };
-    let want = mean_where(&reference::render(&s, &st), |_, _| true);
+    let want = path_traced_mean(&s);
     let got = mean_where(&img, |_, _| true);
     eprintln!("wall under one texel: {got} against the path tracer's {want}");
     // The texel is much brighter than the rest: lit as the environment's sun, a directional
