@@ -65,15 +65,21 @@ fn sphere(s: &mut Scene, r: f32, m: u32) {
     mesh(s, &tris, m);
 }
 
-/// A white (albedo 1) sphere under a uniform sky Le, nothing else: radiance Le everywhere.
-#[test]
-fn a_white_sphere_under_a_uniform_sky_is_the_sky() {
-    let le = Vec3::new(0.5, 1.0, 2.0);
+/// A white (albedo 1) unit sphere under a uniform sky `le`, seen from 4 m.
+fn white_sphere_under(le: Vec3) -> Scene {
     let mut s = empty_scene();
     let m = lambert(&mut s, Vec3::ONE);
     sphere(&mut s, 1.0, m);
     look_at(&mut s, Vec3::new(0.0, 1.0, 4.0), Vec3::ZERO, 40.0);
     s.environment = Some(Environment::uniform(le));
+    s
+}
+
+/// A white (albedo 1) sphere under a uniform sky Le, nothing else: radiance Le everywhere.
+#[test]
+fn a_white_sphere_under_a_uniform_sky_is_the_sky() {
+    let le = Vec3::new(0.5, 1.0, 2.0);
+    let s = white_sphere_under(le);
     let img = render(&s, settings(64));
     let centre = mean_where(&img, |x, y| {
         (x as i32 - 32).pow(2) + (y as i32 - 30).pow(2) < 14 * 14
@@ -129,11 +135,7 @@ fn direct_mode_lights_by_the_environment() {
     let mut st = settings(64);
     st.mode = Mode::Direct;
     let le = Vec3::new(0.5, 1.0, 2.0);
-    let mut s = empty_scene();
-    let m = lambert(&mut s, Vec3::ONE);
-    sphere(&mut s, 1.0, m);
-    look_at(&mut s, Vec3::new(0.0, 1.0, 4.0), Vec3::ZERO, 40.0);
-    s.environment = Some(Environment::uniform(le));
+    let s = white_sphere_under(le);
     let img = render(&s, st.clone());
     let centre = mean_where(&img, |x, y| {
         (x as i32 - 32).pow(2) + (y as i32 - 30).pow(2) < 14 * 14
