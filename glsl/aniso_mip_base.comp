@@ -21,6 +21,12 @@ layout(set = 0, binding = 9, rgba16f) uniform writeonly image3D light_pos;
 // The luminance of each voxel's light that comes from emitters smaller than it
 // (inject_radiance.comp); one texel, not read, when the scene emits nothing.
 layout(set = 0, binding = 10, r32f) uniform readonly image3D small_emission;
+// The light of open backs (inject_radiance.comp), going against emit_dir; one texel, not read,
+// when the voxels hold none (the push constant).
+layout(set = 0, binding = 11, rgba16f) uniform readonly image3D back_radiance;
+layout(push_constant) uniform Push {
+    uint backs;  // 1: back_radiance holds the grid
+} push;
 #endif
 
 #ifndef PAPER
@@ -32,9 +38,14 @@ layout(set = 0, binding = 10, r32f) uniform readonly image3D small_emission;
 // surface blocks light from both sides.
 // `small`: the share of the voxel's light from emitters smaller than it, shown to the side by
 // the cosine (small_emitter_shown).
-vec4 facing(vec4 v, vec3 dir, float small, int face) {
+vec3 face_towards(int face) {
     vec3 towards = vec3(0.0);
     towards[face / 2] = (face % 2 == 0) ? 1.0 : -1.0;  // against the cone's travel
+    return towards;
+}
+
+vec4 facing(vec4 v, vec3 dir, float small, int face) {
+    vec3 towards = face_towards(face);
     float shown = seen_from(dir, towards) * (1.0 - small * (1.0 - small_emitter_shown(dir, towards)));
     return vec4(v.rgb * shown, v.a);
 }
@@ -47,6 +58,7 @@ void main() {
 #ifndef PAPER
     vec4 dirs[8];
     float small[8];
+    vec3 back[8];
     // The stand-in is one texel; a grid has at least two voxels a side (VoxelGrid::fit).
     bool emits = imageSize(small_emission) == imageSize(radiance);
 #endif
@@ -57,6 +69,7 @@ void main() {
         block[i] = inside ? imageLoad(radiance, s) : vec4(0.0);
 #ifndef PAPER
         dirs[i] = inside ? imageLoad(emit_dir, s) : vec4(0.0);
+        back[i] = inside && push.backs != 0u ? imageLoad(back_radiance, s).rgb : vec3(0.0);
         float e = inside && emits ? imageLoad(small_emission, s).r : 0.0;
         float l = dot(block[i].rgb, vec3(0.2126, 0.7152, 0.0722));
         small[i] = l > 0.0 ? clamp(e / l, 0.0, 1.0) : 0.0;
@@ -74,23 +87,29 @@ void main() {
     // that side (cone_tracing.glsl): the face volumes, one per axis, cannot tell a cone that
     // meets a surface from its front from one that comes from behind its plane.
     // And where it lies: each voxel's surface (emit_dir.w: how far from its centre along its
-    // light's direction), in grid units, weighted the same way.
+    // light's direction), in grid units, weighted the same way. An open back's light goes the
+    // other way from the same plane: it weighs the plane as the front's does, and its share
+    // of the weight goes in light_pos.w (cone_tracing.glsl shows it from behind the plane).
     vec4 going = vec4(0.0);
-    vec3 lies = vec3(0.0);
+    vec4 lies = vec4(0.0);
     float n = float(imageSize(radiance).x);
     for (int i = 0; i < 8; i++) {
         // Rec. 709 luminance, as common.glsl's luminance() (whose bindings clash with this pass's).
-        float l = dot(block[i].rgb, vec3(0.2126, 0.7152, 0.0722));
+        float lb = dot(back[i], vec3(0.2126, 0.7152, 0.0722));
+        float l = dot(block[i].rgb, vec3(0.2126, 0.7152, 0.0722)) + lb;
         going += vec4(dirs[i].xyz * l, l);
         ivec3 s = 2 * c + ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1);
         vec3 g = dot(dirs[i].xyz, dirs[i].xyz) > 0.0 ? normalize(dirs[i].xyz) : vec3(0.0);
-        lies += l * (vec3(s) + 0.5 + dirs[i].w * g) / n;
+        lies += vec4(l * (vec3(s) + 0.5 + dirs[i].w * g) / n, lb);
     }
     imageStore(light_dir, c, going * 0.125);
-    imageStore(light_pos, c, vec4(lies * 0.125, 0.0));
+    imageStore(light_pos, c, lies * 0.125);
     for (int face = 0; face < 6; face++) {
         vec4 shown[8];
-        for (int i = 0; i < 8; i++) shown[i] = facing(block[i], dirs[i].xyz, small[i], face);
+        for (int i = 0; i < 8; i++) {
+            shown[i] = facing(block[i], dirs[i].xyz, small[i], face);
+            shown[i].rgb += back[i] * seen_from(-dirs[i].xyz, face_towards(face));
+        }
         vec4 r = reduce_block(shown, face);
         if (face == 0) imageStore(face_nx, c, r);
         else if (face == 1) imageStore(face_px, c, r);

@@ -27,7 +27,11 @@ layout(set = 1, binding = 9, rgba8_snorm) uniform image3D emit_dir;
 layout(set = 1, binding = 11, std430) readonly buffer Reflected { uvec2 reflected[]; };
 // The bounce before's (the light of one order fewer), when there was one.
 layout(set = 1, binding = 13, std430) readonly buffer ReflectedBefore { uvec2 reflected_before[]; };
-layout(set = 1, binding = 12, std430) readonly buffer Reflectance { uint reflectance[8]; };
+// Fronts' sums, then open backs' (inject_bounce.comp).
+layout(set = 1, binding = 12, std430) readonly buffer Reflectance { uint reflectance[16]; };
+// Open backs' light (inject_radiance.comp), with FLAG_BACKS; the reflected buffers then hold a
+// second entry a voxel, its back's (inject_bounce.comp).
+layout(set = 1, binding = 14, rgba16f) uniform image3D back_radiance;
 
 // Lambda is kept at most 0.6 (2.5 times the last bounce): the series multiplies what the last
 // bounce got wrong with the rest, and at 0.8 the light a closed white room leaked through a
@@ -39,25 +43,39 @@ float fixed_sum(uint k) {
     return (float(reflectance[k + 1u]) * 4294967296.0 + float(reflectance[k])) / REFLECTANCE_ONE;
 }
 
+vec3 rgb(uvec2 entry) {
+    return vec3(unpackHalf2x16(entry.x), unpackHalf2x16(entry.y).x);
+}
+
+// The light entry k reflected, on the last bounce with the bounces after it, by the series of
+// the fronts' (sums at 0) or the backs' (at 8) reflectance.
+vec3 with_tail(uint k, uint sums) {
+    vec3 bounce = rgb(reflected[k]);
+    if (push.last == 0u) return bounce;
+    float voxels = fixed_sum(sums + 6u);
+    vec3 lambda = vec3(fixed_sum(sums), fixed_sum(sums + 2u), fixed_sum(sums + 4u))
+                / max(voxels, 1.0);
+    // The series continues the order of light this bounce added, not the orders before
+    // it, which the bounces before traced: with three bounces the third's light is the
+    // second order plus the first again, and scaling all of it counted the first order
+    // twice over (sky-room 0.023 with two bounces, 0.078 with three, 0.136 with four).
+    vec3 before = push.before != 0u ? rgb(reflected_before[k]) : vec3(0.0);
+    return max(before + (bounce - before) / (1.0 - min(lambda, vec3(MAX_LAMBDA))), 0.0);
+}
+
 void main() {
     uint i = list_entry();
     if (!listed(i)) return;
     ivec3 c = listed_voxel(i);
     Voxel v = load_voxel(c);
     if (!v.filled) return;
-    vec3 bounce = vec3(unpackHalf2x16(reflected[i].x), unpackHalf2x16(reflected[i].y).x);
-    float side = unpackHalf2x16(reflected[i].y).y;
-    if (push.last != 0u) {
-        float voxels = fixed_sum(6u);
-        vec3 lambda = vec3(fixed_sum(0u), fixed_sum(2u), fixed_sum(4u)) / max(voxels, 1.0);
-        // The series continues the order of light this bounce added, not the orders before
-        // it, which the bounces before traced: with three bounces the third's light is the
-        // second order plus the first again, and scaling all of it counted the first order
-        // twice over (sky-room 0.023 with two bounces, 0.078 with three, 0.136 with four).
-        vec3 before = push.before != 0u
-            ? vec3(unpackHalf2x16(reflected_before[i].x), unpackHalf2x16(reflected_before[i].y).x)
-            : vec3(0.0);
-        bounce = max(before + (bounce - before) / (1.0 - min(lambda, vec3(MAX_LAMBDA))), 0.0);
+    bool backs = (frame.grid_info.w & FLAG_BACKS) != 0u;
+    uint k = backs ? 2u * i : i;
+    vec3 bounce = with_tail(k, 0u);
+    float side = unpackHalf2x16(reflected[k].y).y;
+    if (backs && open_back(c, v)) {
+        vec4 direct = imageLoad(back_radiance, c);
+        imageStore(back_radiance, c, vec4(direct.rgb + with_tail(k + 1u, 8u), 0.0));
     }
     vec4 direct = imageLoad(radiance, c);
     if (side <= 1.0) {

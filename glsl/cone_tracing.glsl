@@ -14,6 +14,8 @@
 layout(set = CONE_SET, binding = 0) uniform sampler3D radiance_tex;
 #ifndef PAPER
 layout(set = CONE_SET, binding = 8) uniform sampler3D emit_dir_tex;
+// The light of open backs (voxel_data.glsl), read with FLAG_BACKS.
+layout(set = CONE_SET, binding = 11) uniform sampler3D back_radiance_tex;
 #endif
 #endif
 layout(set = CONE_SET, binding = 1) uniform sampler3D aniso_nx;
@@ -28,6 +30,17 @@ layout(set = CONE_SET, binding = 9) uniform sampler3D light_pos;
 // Per cell of frame.tuning.w voxels, the distance in cells to the nearest cell that holds a
 // filled voxel (empty_space.comp).
 layout(set = CONE_SET, binding = 10, r32ui) uniform readonly uimage3D empty_space;
+#endif
+
+#ifndef PAPER
+// How much of a voxel's light going along `going` the face volumes show a cone travelling
+// along `dir` (aniso_mip_base.comp's seen_from per axis, weighted as the cone weighs the axes).
+float seen_along(vec3 going, vec3 dir) {
+    vec3 w = dir * dir;
+    return w.x * seen_from(going, vec3(-sign(dir.x), 0.0, 0.0))
+         + w.y * seen_from(going, vec3(0.0, -sign(dir.y), 0.0))
+         + w.z * seen_from(going, vec3(0.0, 0.0, -sign(dir.z)));
+}
 #endif
 
 // The directional volumes seen by a cone travelling along `dir`, weighted by dir^2. Default:
@@ -62,12 +75,23 @@ vec4 sample_directional(vec3 uvw, vec3 dir, float level, vec3 from, bool from_or
     // dark room. (The face volumes already hide each voxel's light from cones it goes away
     // from; a test of the texel's mean light direction against the cone's hid part of every
     // surface's light in a texel that holds several, such as a room's corner.)
+    // Light from open backs (light_pos.w, its share of the weight) goes against g from the
+    // same plane: seen only from behind it. How much of the sample is the back's is estimated
+    // from the texel's one direction, as the face volumes showed each side to this cone.
     if (from_origin) {
         vec4 going = textureLod(light_dir, uvw, level);
         if (going.w > 0.0) {
             vec3 g = going.xyz / going.w;
-            vec3 lies = textureLod(light_pos, uvw, level).xyz / going.w;
-            s.rgb *= clamp(1.0 + dot(from - lies, g) * float(4 * grid_n()), 0.0, 1.0);
+            vec4 lies = textureLod(light_pos, uvw, level) / going.w;
+            float ahead = dot(from - lies.xyz, g) * float(4 * grid_n());
+            float shown = clamp(1.0 + ahead, 0.0, 1.0);
+            if (lies.w > 0.0) {
+                float front = (1.0 - lies.w) * seen_along(g, dir);
+                float back = lies.w * seen_along(-g, dir);
+                shown = (front * shown + back * clamp(1.0 - ahead, 0.0, 1.0))
+                      / max(front + back, 1e-6);
+            }
+            s.rgb *= shown;
         }
     }
 #endif
@@ -115,9 +139,14 @@ vec4 full_res_seen(vec3 uvw, vec3 dir, vec3 from) {
         // Hidden once the origin is 1/64 of a voxel behind the surface's plane: two steps of
         // the stored offset (RGBA8 snorm). A quarter of a voxel let the shaded side of a thin
         // panel see its lit side at its foot, more with each bounce.
-        float front = clamp(1.0 + dot(from - lies, g) * float(64 * n), 0.0, 1.0);
-        float shown = seen_from(g, -dir) * front;
-        sum += wk.x * wk.y * wk.z * vec4(v.rgb * shown, v.a);
+        float ahead = dot(from - lies, g) * float(64 * n);
+        float shown = seen_from(g, -dir) * clamp(1.0 + ahead, 0.0, 1.0);
+        vec3 light = v.rgb * shown;
+        // An open back's light, from behind the plane (read only where it can show).
+        float back = (frame.grid_info.w & FLAG_BACKS) != 0u && v.a > 0.0
+            ? seen_from(-g, -dir) * clamp(1.0 - ahead, 0.0, 1.0) : 0.0;
+        if (back > 0.0) light += texelFetch(back_radiance_tex, c, 0).rgb * back;
+        sum += wk.x * wk.y * wk.z * vec4(light, v.a);
     }
     return sum;
 }

@@ -25,11 +25,16 @@ layout(set = 1, binding = 5, rgba8) uniform image3D radiance;
 #else
 // Per listed voxel: the light it reflects (times the radiance scale) as half floats, r g and b
 // then, for a two-sided voxel, which way it goes along voxel_facing (-1 to 1; 2: one-sided).
+// With FLAG_BACKS two entries a voxel: then what its back reflects (r g b, 0), zero but for
+// open backs (voxel_data.glsl).
 layout(set = 1, binding = 11, std430) writeonly buffer Reflected { uvec2 reflected[]; };
 // Over the listed voxels: albedo x closed share (r, g, b) and their count, each as 64-bit fixed
-// point (low word, high word; REFLECTANCE_ONE a voxel).
-layout(set = 1, binding = 12, std430) buffer Reflectance { uint reflectance[8]; };
+// point (low word, high word; REFLECTANCE_ONE a voxel); then the same over the open backs that
+// gathered light (the backs' own series: a room of quads facing out holds its light on their
+// backs).
+layout(set = 1, binding = 12, std430) buffer Reflectance { uint reflectance[16]; };
 shared vec4 partial[64];
+shared vec4 partial_back[64];
 #endif
 
 #ifdef PAPER
@@ -112,10 +117,11 @@ void add_fixed(uint k, float x) {
 void main() {
     uint i = list_entry();
     vec4 mine = vec4(0.0);  // albedo x closed share, and 1, for the sums
+    vec4 mine_back = vec4(0.0);  // the same for an open back that gathered light
     if (listed(i)) {
         ivec3 c = listed_voxel(i);
         Voxel v = load_voxel(c);
-        vec3 bounce = vec3(0.0);
+        vec3 bounce = vec3(0.0), back_light = vec3(0.0);
         float side = 2.0;
         if (v.filled) {
             vec3 p = voxel_centre(c);
@@ -136,24 +142,46 @@ void main() {
                 vec4 g = gather(p, n);
                 bounce = v.albedo / PI * g.rgb;
                 closed = g.a;
+                // An open back gathers its own side, kept apart.
+                if (open_back(c, v)) {
+                    vec4 gb = gather(p, -n);
+                    back_light = v.albedo / PI * gb.rgb;
+                    if (luminance(gb.rgb) > 0.0) {
+                        mine_back = vec4(v.albedo * clamp(gb.a, 0.0, 1.0), 1.0);
+                    }
+                }
             }
             mine = vec4(v.albedo * clamp(closed, 0.0, 1.0), 1.0);
         }
         bounce *= frame.tuning.y;
-        reflected[i] = uvec2(packHalf2x16(bounce.rg), packHalf2x16(vec2(bounce.b, side)));
+        back_light *= frame.tuning.y;
+        if ((frame.grid_info.w & FLAG_BACKS) != 0u) {
+            reflected[2u * i] = uvec2(packHalf2x16(bounce.rg), packHalf2x16(vec2(bounce.b, side)));
+            reflected[2u * i + 1u] =
+                uvec2(packHalf2x16(back_light.rg), packHalf2x16(vec2(back_light.b, 0.0)));
+        } else {
+            reflected[i] = uvec2(packHalf2x16(bounce.rg), packHalf2x16(vec2(bounce.b, side)));
+        }
     }
     // The workgroup's sum, then one atomic add per word. Each voxel's share is rounded to the
     // fixed point first: 64 whole numbers of at most 2^16 add up exactly in a float whatever
     // its order, and the list's order (which voxels share a workgroup) changes from run to run.
     uint l = gl_LocalInvocationIndex;
     partial[l] = floor(mine * REFLECTANCE_ONE + 0.5);
+    partial_back[l] = floor(mine_back * REFLECTANCE_ONE + 0.5);
     barrier();
     for (uint s = 32u; s > 0u; s >>= 1u) {
-        if (l < s) partial[l] += partial[l + s];
+        if (l < s) {
+            partial[l] += partial[l + s];
+            partial_back[l] += partial_back[l + s];
+        }
         barrier();
     }
     if (l == 0u && partial[0].w > 0.0) {
         for (uint k = 0u; k < 4u; k++) add_fixed(2u * k, partial[0][k]);
+    }
+    if (l == 0u && partial_back[0].w > 0.0) {
+        for (uint k = 0u; k < 4u; k++) add_fixed(8u + 2u * k, partial_back[0][k]);
     }
 }
 #endif

@@ -27,6 +27,9 @@ layout(set = 1, binding = 6, rgba8_snorm) uniform writeonly image3D emit_dir;
 // The luminance of the emission that comes from emitters covering less than the voxel, which
 // cones see less of from the side (aniso_mip_base.comp). One texel when nothing emits.
 layout(set = 1, binding = 10, r32f) uniform writeonly image3D small_emission;
+// The light the backs of open-backed voxels reflect (voxel_data.glsl's open_back), as the
+// radiance volume's (opacity 0: the front's counts). One texel, not written, without FLAG_BACKS.
+layout(set = 1, binding = 12, rgba16f) uniform writeonly image3D back_radiance;
 #endif
 
 #ifdef PAPER
@@ -68,32 +71,12 @@ float voxel_visibility(vec3 p, vec3 l, float dist) {
     return clamp(1.0 - v, 0.0, 1.0);
 }
 
-void main() {
-    ivec3 c = ivec3(gl_GlobalInvocationID);
-    if (!in_grid(c)) return;
-    Voxel v = load_voxel(c);
-    if (!v.filled) {
-        imageStore(radiance, c, vec4(0.0));
-#ifndef PAPER
-        imageStore(emit_dir, c, vec4(0.0));
-        if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u) imageStore(small_emission, c, vec4(0.0));
-#endif
-        return;
-    }
+// The direct light falling on the surfaces of a voxel at p facing n (or, two-sided, both ways),
+// with axis weights w; for a two-sided voxel also the sides it falls on, weighted by the light
+// they reflect (lit_side).
+vec3 direct_irradiance(vec3 p, vec3 n, vec3 w, bool two_sided, vec3 albedo, inout vec3 lit_side) {
     float vs = voxel_size();
-#ifdef PAPER
-    vec3 p = frame.grid.xyz + vec3(c) * vs;
-    bool two_sided = false;
-#else
-    vec3 p = voxel_centre(c);
-    bool two_sided = v.agreement < 0.5;
-#endif
-    vec3 n = v.normal;
-    vec3 w = v.axis_weights;
-
     vec3 irradiance = vec3(0.0);
-    // Two-sided voxels: the lit sides, weighted by the light they reflect (where the light goes).
-    vec3 lit_side = vec3(0.0);
     for (uint i = 0u; i < frame.counts.x; i++) {
         Light light = lights[i];
         vec3 l;
@@ -120,9 +103,51 @@ void main() {
             : shadow_visibility(light, q, side, shadow_map, area_shadow_map);
         irradiance += e * n_dot_l * vis;
         if (two_sided) {
-            lit_side += luminance(v.albedo * e * n_dot_l * vis) * normalize(w * l + 1e-12);
+            lit_side += luminance(albedo * e * n_dot_l * vis) * normalize(w * l + 1e-12);
         }
     }
+    return irradiance;
+}
+
+void main() {
+    ivec3 c = ivec3(gl_GlobalInvocationID);
+    if (!in_grid(c)) return;
+    Voxel v = load_voxel(c);
+#ifndef PAPER
+    if ((frame.grid_info.w & FLAG_BACKS) != 0u) {
+        // Its back lit as a surface facing the other way (its shadow looked up behind it).
+        vec3 back = vec3(0.0);
+        if (open_back(c, v)) {
+            vec3 unused = vec3(0.0);
+            vec3 e = direct_irradiance(voxel_centre(c), -v.normal, v.axis_weights, false, v.albedo,
+                                       unused);
+            back = v.albedo / PI * e * frame.tuning.y;
+        }
+        imageStore(back_radiance, c, vec4(back, 0.0));
+    }
+#endif
+    if (!v.filled) {
+        imageStore(radiance, c, vec4(0.0));
+#ifndef PAPER
+        imageStore(emit_dir, c, vec4(0.0));
+        if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u) imageStore(small_emission, c, vec4(0.0));
+#endif
+        return;
+    }
+    float vs = voxel_size();
+#ifdef PAPER
+    vec3 p = frame.grid.xyz + vec3(c) * vs;
+    bool two_sided = false;
+#else
+    vec3 p = voxel_centre(c);
+    bool two_sided = v.agreement < 0.5;
+#endif
+    vec3 n = v.normal;
+    vec3 w = v.axis_weights;
+
+    // Two-sided voxels: the lit sides, weighted by the light they reflect (where the light goes).
+    vec3 lit_side = vec3(0.0);
+    vec3 irradiance = direct_irradiance(p, n, w, two_sided, v.albedo, lit_side);
 #ifdef PAPER
     vec3 outgoing = v.albedo * irradiance + v.emission;
 #else

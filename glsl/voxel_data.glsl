@@ -122,4 +122,27 @@ vec3 voxel_facing(Voxel v) {
          : (v.axis_weights.y >= v.axis_weights.z ? vec3(0.0, 1.0, 0.0) : vec3(0.0, 0.0, 1.0));
 }
 
+#ifndef PAPER
+// Whether a voxel holds the light of its surface's back apart (the back radiance volume, with
+// FLAG_BACKS): one surface facing one way (its normals agree; a thin panel's two faces in one
+// voxel are two-sided instead), with empty voxels behind it for a quarter of the grid's edge
+// (or to the grid's edge). A zero-thickness wall reflects on both sides (the path tracer's
+// surfaces do): a room built of single quads facing out, lit from inside, reflects its light
+// inwards from the quads' backs. Behind a solid's surface lies the solid: its other surface,
+// near. A hollow narrower than that keeps its inside dark, as a solid's: a light inside a
+// small box would reach the cones through the coarse texels, which average the box's walls
+// across before they hide one behind the other along (a 30 cm crate 9 voxels wide, a point
+// light inside, lit the room around it 2.3 times over with 8 voxels; with 16 not at all).
+bool open_back(ivec3 c, Voxel v) {
+    if ((frame.grid_info.w & FLAG_BACKS) == 0u || !v.filled || v.agreement < 0.5) return false;
+    vec3 centre = vec3(c) + 0.5;
+    for (int s = 1; s <= max(grid_n() / 4, 1); s++) {
+        ivec3 behind = ivec3(floor(centre - v.normal * float(s)));
+        if (!in_grid(behind)) return true;
+        if (voxel_filled(behind)) return false;
+    }
+    return true;
+}
+#endif
+
 #endif

@@ -175,6 +175,11 @@ struct GiOpts {
     /// read nothing: the same image, faster in open scenes)
     #[arg(long)]
     no_empty_space: bool,
+    /// Voxels do not hold the light of their surfaces' backs apart (by default a
+    /// zero-thickness surface with nothing behind it reflects on both sides, as a path
+    /// tracer's does)
+    #[arg(long)]
+    no_backs: bool,
 }
 
 fn trace_scale(s: &str) -> Result<u32, String> {
@@ -737,6 +742,7 @@ impl GiOpts {
         gi.temporal = self.temporal.unwrap_or(gi.temporal);
         gi.specular_min_voxels = self.specular_min.unwrap_or(gi.specular_min_voxels);
         gi.empty_space &= !self.no_empty_space;
+        gi.backs &= !self.no_backs;
         gi
     }
 }

@@ -296,9 +296,7 @@ pub fn sweep_run(
         ..Default::default()
     };
     let report = run(&mut renderer, scene, motion, &opts, |_| {})?;
-    let voxels = renderer
-        .count_non_finite()?
-        .map_or(0, |n| n.radiance + n.directional + n.small_emission);
+    let voxels = renderer.count_non_finite()?.map_or(0, |n| n.total());
     drop(renderer);
     Ok(SweepRun {
         frames,

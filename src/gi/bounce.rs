@@ -36,8 +36,9 @@ struct Tail {
     enabled: bool,
 }
 
-/// Bytes of the reflectance sums: r, g, b and count, two words each.
-const REFLECTANCE_BYTES: u64 = 32;
+/// Bytes of the reflectance sums: r, g, b and count, two words each, over the voxels' fronts
+/// and then over the open backs that gathered light.
+const REFLECTANCE_BYTES: u64 = 64;
 
 /// The first room in the voxel list: every voxel of a small grid; surfaces (about N^2 per side
 /// of the grid they cross) beyond that, so that 512^3 starts within a 128 MiB storage buffer. A
@@ -50,8 +51,13 @@ pub fn list_capacity(n: u32) -> u64 {
 /// The most a list can hold: every voxel, within what one storage buffer may span and one
 /// allocation may take (each entry 4 bytes in the list and, but for --paper, 8 in what the
 /// gather leaves).
-pub fn list_capacity_limit(ctx: &Context, n: u32, paper: bool) -> u64 {
-    let entry = if paper { 4 } else { 8 };
+pub fn list_capacity_limit(ctx: &Context, n: u32, paper: bool, backs: bool) -> u64 {
+    let entry = match (paper, backs) {
+        (true, _) => 4,
+        (false, false) => 8,
+        // A second entry a voxel for its back's light.
+        (false, true) => 16,
+    };
     let span = (ctx.properties.limits.max_storage_buffer_range as u64).min(ctx.max_allocation);
     (n as u64).pow(3).min((span - 16) / entry)
 }
@@ -67,6 +73,9 @@ pub fn cone_volumes(table: Bindings, volumes: &Volumes, full_res: bool) -> Bindi
             .sampled("radiance_tex", &volumes.radiance, s)
             .with(volumes.emit_dir.as_ref(), |t, d| {
                 t.sampled("emit_dir_tex", d, s)
+            })
+            .with(volumes.back_radiance.as_ref(), |t, b| {
+                t.sampled("back_radiance_tex", b, s)
             });
     }
     for (f, name) in volumes
@@ -113,12 +122,14 @@ impl Bounce {
         } else {
             // The second is written from the third bounce on (odd bounces); with two it is
             // bound but neither written nor read.
+            // With the backs' light a second entry a voxel.
+            let per_voxel = if volumes.holds_backs() { 16 } else { 8 };
             let reflected = |k: usize| {
                 let entries = if k == 0 || bounces >= 3 { capacity } else { 1 };
                 Buffer::new(
                     ctx,
                     &format!("bounce reflected {k}"),
-                    8 * entries,
+                    per_voxel * entries,
                     vk::BufferUsageFlags::STORAGE_BUFFER,
                     MemoryLocation::GpuOnly,
                 )
@@ -177,6 +188,9 @@ impl Bounce {
                         .buffer("Reflectance", &reflectance, Usage::Read)
                         .with(volumes.emit_dir.as_ref(), |t, d| {
                             t.image("emit_dir", d, Usage::ReadWrite)
+                        })
+                        .with(volumes.back_radiance.as_ref(), |t, b| {
+                            t.image("back_radiance", b, Usage::ReadWrite)
                         })
                 };
                 let pass = Pass::new(

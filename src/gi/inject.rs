@@ -61,6 +61,9 @@ impl Inject {
             })
             .with(volumes.small_emission.as_ref(), |t, s| {
                 t.image("small_emission", s, Usage::Write)
+            })
+            .with(volumes.back_radiance.as_ref(), |t, b| {
+                t.image("back_radiance", b, Usage::Write)
             });
         let shader = variant("inject_radiance.comp", paper);
         Ok(Inject {

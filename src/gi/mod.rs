@@ -87,6 +87,11 @@ pub struct GiSettings {
     /// filled one (src/gi/empty_space.rs), lets a cone skip the samples that could read
     /// nothing. Not for `paper`.
     pub empty_space: bool,
+    /// A voxel of a surface facing one way with nothing behind it (a zero-thickness wall, a
+    /// quad) holds the light its back reflects apart, in a second radiance volume: lit
+    /// directly, gathering its own side in the bounces, and seen by cones from behind only
+    /// (glsl/voxel_data.glsl, `open_back`). Not for `paper`, whose voxels shine every way.
+    pub backs: bool,
 }
 
 impl Default for GiSettings {
@@ -138,6 +143,9 @@ impl Default for GiSettings {
             // The same images (the skipped samples read nothing), the specular cone's trace
             // 1.5 to 2 times faster on open scenes (docs/fast-frames.md, "Empty space").
             empty_space: true,
+            // A room of single quads facing out, open on one side under a sky: relMSE 0.072
+            // without (its quads' voxels reflected only outwards), docs/environment.md.
+            backs: true,
         }
     }
 }
@@ -165,6 +173,7 @@ impl GiSettings {
             temporal: 0,
             specular_min_voxels: 1.0,
             empty_space: false,
+            backs: false,
             ..Default::default()
         }
     }
@@ -373,6 +382,14 @@ pub const FIELDS: &[Field] = &[
         max: 1.0,
         get: |g| Value::Switch(g.empty_space),
         set: |g, v| g.empty_space = v != 0.0,
+    },
+    Field {
+        axis: "backs",
+        column: "backs",
+        min: 0.0,
+        max: 1.0,
+        get: |g| Value::Switch(g.backs),
+        set: |g, v| g.backs = v != 0.0,
     },
 ];
 
@@ -589,6 +606,7 @@ pub const FLAG_VOXEL_SHADOWS: u32 = 4;
 pub const FLAG_CONE_SHADOWS: u32 = 8;
 pub const FLAG_EMPTY_SPACE: u32 = 16;
 pub const FLAG_PAPER_SLIPS: u32 = 32;
+pub const FLAG_BACKS: u32 = 64;
 
 /// The voxel passes a renderer runs: only those its mode and scene need.
 pub struct Gi {
@@ -691,7 +709,8 @@ impl Gi {
             let capacity = inputs
                 .list_capacity
                 .unwrap_or_else(|| bounce::list_capacity(n));
-            let capacity = capacity.clamp(1, bounce::list_capacity_limit(ctx, n, paper));
+            let backs = volumes.holds_backs();
+            let capacity = capacity.clamp(1, bounce::list_capacity_limit(ctx, n, paper, backs));
             Some(Bounce::new(
                 ctx,
                 scene_set,
@@ -748,6 +767,7 @@ impl Gi {
                 self.settings.paper && self.settings.paper_slips,
                 FLAG_PAPER_SLIPS,
             )
+            | flag(self.volumes.holds_backs(), FLAG_BACKS)
     }
 
     /// The voxel passes a frame records when `dirty` says what changed, in order: the volumes
@@ -875,7 +895,8 @@ impl Gi {
         };
         let from = b.capacity();
         let n = self.volumes.grid.resolution;
-        let limit = bounce::list_capacity_limit(ctx, n, self.settings.paper);
+        let (paper, backs) = (self.settings.paper, self.volumes.holds_backs());
+        let limit = bounce::list_capacity_limit(ctx, n, paper, backs);
         let to = (count + count / 4).min(limit);
         if to <= from {
             return Ok(ListFit::Short {
@@ -1118,8 +1139,9 @@ mod tests {
             temporal: _,
             specular_min_voxels: _,
             empty_space: _,
+            backs: _,
         } = GiSettings::default();
-        assert_eq!(FIELDS.len(), 19, "a setting without its line in FIELDS");
+        assert_eq!(FIELDS.len(), 20, "a setting without its line in FIELDS");
         for f in FIELDS {
             let d = GiSettings::default();
             let mut g = d.clone();

@@ -28,6 +28,9 @@ pub struct VoxelDump {
     /// When the voxels are lit and the scene emits (default mode): the emission of emitters
     /// smaller than their voxel, as stored.
     pub small_emission: Option<Vec<f32>>,
+    /// When the voxels are lit and hold their backs' light (`GiSettings::backs`): each voxel's
+    /// back's outgoing radiance (zero but for open backs).
+    pub back_radiance: Option<Vec<Vec3>>,
     /// When the voxels are lit and cones skip empty space: per cell of `empty_space_cell`
     /// voxels a side (x fastest), its distance in cells to the nearest filled cell.
     pub empty_space: Option<Vec<u32>>,
@@ -48,6 +51,7 @@ impl VoxelDump {
             radiance: None,
             directional: None,
             small_emission: None,
+            back_radiance: None,
             empty_space: None,
             empty_space_cell: 0,
         }
@@ -129,6 +133,7 @@ enum Lit {
     /// In the order of `Volumes::directional`.
     Directional(usize),
     SmallEmission,
+    BackRadiance,
 }
 
 /// One mip level of a lit volume, as the readbacks copy it.
@@ -179,6 +184,15 @@ impl Gi {
                 level: 0,
                 side: n,
                 kind: Lit::SmallEmission,
+            });
+        }
+        if let (Some(back), true) = (&self.volumes.back_radiance, self.volumes.holds_backs()) {
+            levels.push(LitLevel {
+                img: back,
+                texel: 8,
+                level: 0,
+                side: n,
+                kind: Lit::BackRadiance,
             });
         }
         levels
@@ -253,6 +267,7 @@ impl Gi {
                     name
                 }
                 Lit::SmallEmission => "small".to_string(),
+                Lit::BackRadiance => "back".to_string(),
             };
             sources.push((name, Src::Img(l.img, l.texel, l.level, l.side)));
         }
@@ -342,6 +357,11 @@ impl Gi {
                 .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
                 .collect()
         });
+        // Back to radiance: the volumes hold it times the radiance scale.
+        let k = self.radiance_scale;
+        dump.back_radiance = parts
+            .get("back")
+            .map(|b| halves(b).into_iter().map(|t| t.truncate() / k).collect());
         if let Some(r) = parts.get("r") {
             let texels: Vec<Vec4> = if self.settings.paper {
                 words(r)
@@ -351,8 +371,6 @@ impl Gi {
             } else {
                 halves(r)
             };
-            // Back to radiance: the volume holds it times the radiance scale.
-            let k = self.radiance_scale;
             dump.radiance = Some(
                 texels
                     .into_iter()
@@ -489,6 +507,14 @@ pub struct NonFinite {
     pub directional: usize,
     /// Voxels of the small emitters' volume.
     pub small_emission: usize,
+    /// Voxels of the backs' radiance volume.
+    pub back_radiance: usize,
+}
+
+impl NonFinite {
+    pub fn total(&self) -> usize {
+        self.radiance + self.directional + self.small_emission + self.back_radiance
+    }
 }
 
 impl Gi {
@@ -531,6 +557,7 @@ impl Gi {
                 Lit::Radiance => found.radiance += bad,
                 Lit::Directional(_) => found.directional += bad,
                 Lit::SmallEmission => found.small_emission += bad,
+                Lit::BackRadiance => found.back_radiance += bad,
             }
         }
         states.forget(host.raw);

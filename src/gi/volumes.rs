@@ -181,6 +181,10 @@ pub struct Volumes {
     /// side, cones see only part of it (aniso_mip_base.comp). One texel, never read, when the
     /// scene emits nothing; None for --paper.
     pub small_emission: Option<Image>,
+    /// The light the backs of open-backed voxels reflect (RGBA16F, as the radiance volume's;
+    /// `GiSettings::backs`, glsl/voxel_data.glsl's `open_back`). One texel, never read,
+    /// without it; None for --paper.
+    pub back_radiance: Option<Image>,
     /// The six directional volumes (-X, +X, -Y, +Y, -Z, +Z) with full mip chains.
     pub faces: Vec<Image>,
     /// Beside the directional volumes, texel for texel: where their light goes (xyz, the
@@ -203,6 +207,13 @@ pub struct Volumes {
 }
 
 impl Volumes {
+    /// Whether the back radiance volume covers the grid (`GiSettings::backs`).
+    pub fn holds_backs(&self) -> bool {
+        self.back_radiance
+            .as_ref()
+            .is_some_and(|b| b.desc.extent.width == self.grid.resolution)
+    }
+
     /// The directional volumes and the volumes beside them (light direction and position),
     /// which the mip passes write and the cones sample together.
     pub fn directional(&self) -> impl Iterator<Item = &Image> {
@@ -228,6 +239,7 @@ impl Volumes {
         let radiance = radiance_volume(ctx, n, texels, &mut info)?;
         let emit_dir = light_direction_volume(ctx, n, settings, &mut info)?;
         let small_emission = small_emission_volume(ctx, n, settings, emissive, &mut info)?;
+        let back_radiance = back_radiance_volume(ctx, n, settings, &mut info)?;
         let (faces, face_bytes) = directional_volumes(ctx, grid, texels, &mut info)?;
         let light_dir = beside_directional(
             ctx,
@@ -253,6 +265,7 @@ impl Volumes {
             radiance,
             emit_dir,
             small_emission,
+            back_radiance,
             faces,
             light_dir,
             light_pos,
@@ -354,6 +367,28 @@ fn small_emission_volume(
         });
     }
     Some(Image::new(ctx, "voxel emission of small emitters", desc)).transpose()
+}
+
+/// The backs' light (not for --paper; the bindings stay, so without `GiSettings::backs` a
+/// one-texel stand-in).
+fn back_radiance_volume(
+    ctx: &Arc<Context>,
+    n: u32,
+    settings: &GiSettings,
+    info: &mut Vec<VolumeInfo>,
+) -> VkResult<Option<Image>> {
+    if settings.paper {
+        return Ok(None);
+    }
+    let side = if settings.backs { n } else { 1 };
+    let desc = ImageDesc::d3(vk::Format::R16G16B16A16_SFLOAT, side, volume_usage());
+    if settings.backs {
+        info.push(VolumeInfo {
+            name: "voxel radiance of open backs (R16G16B16A16_SFLOAT)".into(),
+            bytes: (n as u64).pow(3) * 8,
+        });
+    }
+    Some(Image::new(ctx, "voxel radiance of open backs", desc)).transpose()
 }
 
 /// Step 3's six directional volumes with their mips; also the bytes of one of them.

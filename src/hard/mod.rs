@@ -271,6 +271,7 @@ impl Env {
                 ("voxels", bad.radiance),
                 ("directional volume texels", bad.directional),
                 ("small emitters' voxels", bad.small_emission),
+                ("backs' voxels", bad.back_radiance),
             ] {
                 if count > 0 {
                     self.non_finite
