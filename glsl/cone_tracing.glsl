@@ -142,10 +142,12 @@ vec4 full_res_seen(vec3 uvw, vec3 dir, vec3 from) {
         float ahead = dot(from - lies, g) * float(64 * n);
         float shown = seen_from(g, -dir) * clamp(1.0 + ahead, 0.0, 1.0);
         vec3 light = v.rgb * shown;
-        // An open back's light, from behind the plane (read only where it can show).
-        float back = (frame.grid_info.w & FLAG_BACKS) != 0u && v.a > 0.0
-            ? seen_from(-g, -dir) * clamp(1.0 - ahead, 0.0, 1.0) : 0.0;
-        if (back > 0.0) light += texelFetch(back_radiance_tex, c, 0).rgb * back;
+        // An open back's light, from behind the plane (read only where it can show: most
+        // samples lie well in front of the planes they read).
+        if (ahead < 1.0 && v.a > 0.0 && (frame.grid_info.w & FLAG_BACKS) != 0u) {
+            float back = seen_from(-g, -dir) * clamp(1.0 - ahead, 0.0, 1.0);
+            if (back > 0.0) light += texelFetch(back_radiance_tex, c, 0).rgb * back;
+        }
         sum += wk.x * wk.y * wk.z * vec4(light, v.a);
     }
     return sum;

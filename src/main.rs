@@ -613,8 +613,8 @@ struct BenchCmd {
     /// AXIS := NAME=V1,V2,..: the cartesian product of the axes over the defaults. Presets:
     /// default (one axis at a time around the defaults), tiny (32^3: default and paper). Axes:
     /// voxels, bounces, paper, cones, aperture, step, max-distance, start-offset, ao-falloff,
-    /// voxel-shadows, cone-shadows, lod-offset, tail, area-lights, trace-scale,
-    /// temporal
+    /// voxel-shadows, cone-shadows, paper-slips, lod-offset, tail, area-lights, trace-scale,
+    /// temporal, specular-min, empty-space, backs
     #[arg(long, default_value = "default")]
     sweep: String,
     /// Where the results go

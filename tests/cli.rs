@@ -357,3 +357,19 @@ fn progress_bars_are_drawn_on_a_terminal_only() {
         "a bar on a pipe:\n{piped}"
     );
 }
+
+/// `bench --help` names every axis a sweep can vary (each field of `GiSettings`).
+#[test]
+fn bench_help_names_every_sweep_axis() {
+    let (ok, out, err) = voxgi(&["bench", "--help"]);
+    assert!(ok, "bench --help failed:\n{err}");
+    // The axes' list, its lines joined.
+    let text = out.split_whitespace().collect::<Vec<_>>().join(" ");
+    for f in voxgi::gi::FIELDS {
+        assert!(
+            text.contains(&format!(" {},", f.axis)) || text.contains(&format!(" {} ", f.axis)),
+            "bench --help does not name the axis {}",
+            f.axis
+        );
+    }
+}
