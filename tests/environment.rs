@@ -261,11 +261,11 @@ fn a_floor_under_a_roof_open_on_one_side_matches_the_path_tracer() {
     let reference = reference::render(&s, &st);
     let e = rel_mse(&img, &reference);
     eprintln!("roof open on one side: relMSE {e:.4}");
-    // Measured 0.089 (2026-12-04; 0.031 against a path tracer of two bounces, whose own
-    // distance to the full one is 0.044; issue 31's goal is 0.02). The walls' fronts face out,
-    // and a zero-thickness surface's voxel reflects to its front only (0.024 wound inwards,
-    // docs/environment.md).
-    assert!(e < 0.1, "relMSE {e}");
+    // Measured 0.0256 (2026-12-05; 48x48 and a 256-spp reference carry noise; issue 31's goal
+    // of 0.02 is at 256x256). The walls' fronts face out: their voxels hold the light of their
+    // backs apart, which the room is lit by (0.089 before, when a zero-thickness surface's
+    // voxel reflected to its front only; docs/environment.md).
+    assert!(e < 0.03, "relMSE {e}");
 }
 
 /// An image whose texels hold their own centre's image coordinates (u, v) in red and green:

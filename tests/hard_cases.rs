@@ -215,16 +215,17 @@ fn leak_junction() {
     check_open("leak-junction", 0.0118)
 }
 
-/// sky-room's and sky-room-outward's goal (0.02) is open (docs/environment.md): 0.0232 and
-/// 0.0722 at 64x64, 0.0289 and 0.0818 at the tests' 48x48.
+/// sky-room's and sky-room-outward's goal (0.02) is met at 64x64 (0.0163 and 0.0169) and at
+/// issue 31's 256x256 (docs/environment.md), not at the tests' 48x48: 0.0230 and 0.0254
+/// (before the voxels held their backs' light, the room facing out measured 0.0818 here).
 #[test]
 fn sky_room() {
-    check_open("sky-room", 0.03)
+    check_open("sky-room", 0.024)
 }
 
 #[test]
 fn sky_room_outward() {
-    check_open("sky-room-outward", 0.085)
+    check_open("sky-room-outward", 0.027)
 }
 
 macro_rules! cases {

@@ -315,6 +315,16 @@ impl Env {
         img
     }
 
+    /// `run` with references of `factor` times the samples per pixel: for scenes lit mostly
+    /// by light that bounced, on which the path tracer converges slowly.
+    pub fn with_more_samples<T>(&mut self, factor: u32, run: impl FnOnce(&mut Env) -> T) -> T {
+        let spp = self.ref_spp;
+        self.ref_spp = spp.saturating_mul(factor);
+        let out = run(self);
+        self.ref_spp = spp;
+        out
+    }
+
     /// relMSE of the real-time image of `scene` against the reference.
     pub fn error_vs_reference(
         &mut self,
