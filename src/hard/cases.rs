@@ -345,7 +345,7 @@ pub static CASES: &[Case] = &[
         name: "sky-room",
         group: "environment",
         what: "a 4 x 2.5 x 4 m room open on one side under a uniform sky, its walls facing \
-               in; relMSE against the reference",
+               in; relMSE against the reference (four times the samples)",
         metric: "relMSE",
         goal: Goal::AtMost(0.02),
         run: |env, gi| {
@@ -359,7 +359,7 @@ pub static CASES: &[Case] = &[
         name: "sky-room-outward",
         group: "environment",
         what: "the same room, its walls single quads facing out (lit on their backs inside); \
-               relMSE against the reference",
+               relMSE against the reference (four times the samples)",
         metric: "relMSE",
         goal: Goal::AtMost(0.02),
         run: |env, gi| {
