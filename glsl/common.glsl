@@ -42,7 +42,7 @@ const uint FLAG_VOXEL_SHADOWS = 4u;  // visibility by tracing the voxels instead
 const uint FLAG_CONE_SHADOWS = 8u;   // direct light shadowed by cones through the voxels
 const uint FLAG_EMPTY_SPACE = 16u;   // the empty-space volume is filled: cones may skip by it
 const uint FLAG_PAPER_SLIPS = 32u;   // PAPER: the original's C++ slips reproduced (--paper-slips)
-const uint FLAG_BACKS = 64u;         // the back radiance volume holds open backs' light (--backs)
+const uint FLAG_BACKS = 64u;         // the back radiance volume is filled (GiSettings::backs)
 
 struct Material {
     vec4 base_color;

@@ -1,8 +1,9 @@
 #version 450
 // variants: PAPER
 // Debug views of the volumes: each pixel's camera ray walks the voxels (Amanatides and Woo)
-// and shows the first non-empty one: albedo, normal (n * 0.5 + 0.5), emission, radiance, or the
-// directional volumes at mip level frame.trace.w, seen along the ray.
+// and shows the first non-empty one: albedo, normal (n * 0.5 + 0.5), emission, radiance (from
+// behind its surface, its back's where it holds one), or the directional volumes at mip level
+// frame.trace.w, seen along the ray.
 #include "common.glsl"
 #include "voxel_common.glsl"
 #define VOXEL_SET 1
@@ -53,6 +54,13 @@ void main() {
                 if (s.a > 0.0) { result = vec4(s.rgb / frame.tuning.y, 1.0); break; }
             } else if (pass.mode == 3u) {
                 vec4 s = texelFetch(radiance_tex, c, 0);
+#ifndef PAPER
+                // Seen from behind its surface, a voxel that holds its back's light shows it.
+                if (s.a > 0.0 && dot(texelFetch(emit_dir_tex, c, 0).xyz, dir) > 0.0
+                    && open_back(c, load_voxel(c))) {
+                    s.rgb = texelFetch(back_radiance_tex, c, 0).rgb;
+                }
+#endif
                 if (s.a > 0.0) { result = vec4(s.rgb / frame.tuning.y, 1.0); break; }
             } else {
                 Voxel v = load_voxel(c);
