@@ -110,17 +110,7 @@ fn path_traced_mean(s: &Scene) -> Vec3 {
 fn wall_under(sky: EnvImage, turn: f32) -> Scene {
     let mut s = empty_scene();
     let m = lambert(&mut s, Vec3::splat(0.8));
-    let a = 1.0;
-    quad(
-        &mut s,
-        [
-            Vec3::new(0.0, -a, a),
-            Vec3::new(0.0, -a, -a),
-            Vec3::new(0.0, a, -a),
-            Vec3::new(0.0, a, a),
-        ],
-        m,
-    );
+    wall_facing_x(&mut s, 1.0, m);
     look_at(&mut s, Vec3::new(3.0, 0.0, 0.0), Vec3::ZERO, 20.0);
     s.environment = Some(Environment::image(sky).turned(turn));
     s

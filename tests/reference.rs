@@ -6,7 +6,9 @@
 mod common;
 mod gpu;
 use glam::{Mat4, Vec3};
-use gpu::{emitter, empty_scene, floor, floor_under_sky, lambert, light, quad, top_camera};
+use gpu::{
+    emitter, empty_scene, floor, floor_under_sky, lambert, light, quad, top_camera, wall_facing_x,
+};
 use std::f32::consts::PI;
 use std::path::PathBuf;
 use voxgi::output::RadianceImage;
@@ -856,17 +858,7 @@ fn wall_under_one_texel(turn_deg: f32, env_sampling: bool, spp: u32) -> (Vec3, f
     let (x, y) = (48, 15);
     let mut s = empty_scene();
     let m = lambert(&mut s, Vec3::splat(albedo));
-    let a = 1.0;
-    quad(
-        &mut s,
-        [
-            Vec3::new(0.0, -a, a),
-            Vec3::new(0.0, -a, -a),
-            Vec3::new(0.0, a, -a),
-            Vec3::new(0.0, a, a),
-        ],
-        m,
-    );
+    wall_facing_x(&mut s, 1.0, m);
     s.camera = look_at(Vec3::new(3.0, 0.0, 0.0), Vec3::ZERO, Vec3::Y, 20.0);
     s.environment = Some(one_texel_sky(w, h, x, y, le, turn_deg));
     let st = ReferenceSettings {

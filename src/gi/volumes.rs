@@ -341,8 +341,38 @@ fn light_direction_volume(
     Some(Image::new(ctx, "voxel light direction", desc)).transpose()
 }
 
-/// Emission of emitters too small to be area lights (not for --paper; the bindings stay, so a
-/// scene without emitters gets a one-texel stand-in).
+/// A full-resolution volume that only some scenes or settings use: the grid's size when
+/// `used`, else a one-texel stand-in (never read) that keeps the passes' bindings; listed in
+/// `info` (as `label`) only when used.
+struct Optional {
+    name: &'static str,
+    label: &'static str,
+    format: vk::Format,
+    texel_bytes: u64,
+    usage: vk::ImageUsageFlags,
+}
+
+impl Optional {
+    fn make(
+        &self,
+        ctx: &Arc<Context>,
+        n: u32,
+        used: bool,
+        info: &mut Vec<VolumeInfo>,
+    ) -> VkResult<Image> {
+        if used {
+            info.push(VolumeInfo {
+                name: self.label.into(),
+                bytes: (n as u64).pow(3) * self.texel_bytes,
+            });
+        }
+        let side = if used { n } else { 1 };
+        Image::new(ctx, self.name, ImageDesc::d3(self.format, side, self.usage))
+    }
+}
+
+/// Emission of emitters too small to be area lights (not for --paper; a stand-in without
+/// emitters).
 fn small_emission_volume(
     ctx: &Arc<Context>,
     n: u32,
@@ -353,24 +383,18 @@ fn small_emission_volume(
     if settings.paper {
         return Ok(None);
     }
-    let side = if emissive { n } else { 1 };
-    // Storage only: the inject pass writes it, the mip pass reads it, the readback copies it.
-    let desc = ImageDesc::d3(
-        vk::Format::R32_SFLOAT,
-        side,
-        vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
-    );
-    if emissive {
-        info.push(VolumeInfo {
-            name: "voxel emission of small emitters (R32F)".into(),
-            bytes: (n as u64).pow(3) * 4,
-        });
-    }
-    Some(Image::new(ctx, "voxel emission of small emitters", desc)).transpose()
+    let volume = Optional {
+        name: "voxel emission of small emitters",
+        label: "voxel emission of small emitters (R32F)",
+        format: vk::Format::R32_SFLOAT,
+        texel_bytes: 4,
+        // Storage only: the inject pass writes it, the mip pass reads it, the readback copies it.
+        usage: vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+    };
+    volume.make(ctx, n, emissive, info).map(Some)
 }
 
-/// The backs' light (not for --paper; the bindings stay, so without `GiSettings::backs` a
-/// one-texel stand-in).
+/// The backs' light (not for --paper; a stand-in without `GiSettings::backs`).
 fn back_radiance_volume(
     ctx: &Arc<Context>,
     n: u32,
@@ -380,15 +404,14 @@ fn back_radiance_volume(
     if settings.paper {
         return Ok(None);
     }
-    let side = if settings.backs { n } else { 1 };
-    let desc = ImageDesc::d3(vk::Format::R16G16B16A16_SFLOAT, side, volume_usage());
-    if settings.backs {
-        info.push(VolumeInfo {
-            name: "voxel radiance of open backs (R16G16B16A16_SFLOAT)".into(),
-            bytes: (n as u64).pow(3) * 8,
-        });
-    }
-    Some(Image::new(ctx, "voxel radiance of open backs", desc)).transpose()
+    let volume = Optional {
+        name: "voxel radiance of open backs",
+        label: "voxel radiance of open backs (RGBA16F)",
+        format: vk::Format::R16G16B16A16_SFLOAT,
+        texel_bytes: 8,
+        usage: volume_usage(),
+    };
+    volume.make(ctx, n, settings.backs, info).map(Some)
 }
 
 /// Step 3's six directional volumes with their mips; also the bytes of one of them.

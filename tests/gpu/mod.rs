@@ -144,6 +144,20 @@ pub fn floor(scene: &mut Scene, h: f32, material: u32) {
     );
 }
 
+/// A vertical square wall of half-size `h` in the plane x = 0, facing +X.
+pub fn wall_facing_x(scene: &mut Scene, h: f32, material: u32) {
+    quad(
+        scene,
+        [
+            Vec3::new(0.0, -h, h),
+            Vec3::new(0.0, -h, -h),
+            Vec3::new(0.0, h, -h),
+            Vec3::new(0.0, h, h),
+        ],
+        material,
+    );
+}
+
 /// A Lambertian floor of albedo `albedo` (half-size 2) under a uniform sky `le`, seen from
 /// 3 m above at 40 degrees: it gets irradiance pi Le, so its radiance is albedo x Le.
 pub fn floor_under_sky(albedo: f32, le: Vec3) -> Scene {
