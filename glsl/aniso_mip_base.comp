@@ -22,11 +22,8 @@ layout(set = 0, binding = 9, rgba16f) uniform writeonly image3D light_pos;
 // (inject_radiance.comp); one texel, not read, when the scene emits nothing.
 layout(set = 0, binding = 10, r32f) uniform readonly image3D small_emission;
 // The light of open backs (inject_radiance.comp), going against emit_dir; one texel, not read,
-// when the voxels hold none (the push constant).
+// without GiSettings::backs.
 layout(set = 0, binding = 11, rgba16f) uniform readonly image3D back_radiance;
-layout(push_constant) uniform Push {
-    uint backs;  // 1: back_radiance holds the grid
-} push;
 #endif
 
 #ifndef PAPER
@@ -61,6 +58,7 @@ void main() {
     vec3 back[8];
     // The stand-in is one texel; a grid has at least two voxels a side (VoxelGrid::fit).
     bool emits = imageSize(small_emission) == imageSize(radiance);
+    bool backs = imageSize(back_radiance) == imageSize(radiance);
 #endif
     for (int i = 0; i < 8; i++) {
         ivec3 s = 2 * c + ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1);
@@ -69,7 +67,7 @@ void main() {
         block[i] = inside ? imageLoad(radiance, s) : vec4(0.0);
 #ifndef PAPER
         dirs[i] = inside ? imageLoad(emit_dir, s) : vec4(0.0);
-        back[i] = inside && push.backs != 0u ? imageLoad(back_radiance, s).rgb : vec3(0.0);
+        back[i] = inside && backs ? imageLoad(back_radiance, s).rgb : vec3(0.0);
         float e = inside && emits ? imageLoad(small_emission, s).r : 0.0;
         float l = dot(block[i].rgb, vec3(0.2126, 0.7152, 0.0722));
         small[i] = l > 0.0 ? clamp(e / l, 0.0, 1.0) : 0.0;

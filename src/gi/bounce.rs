@@ -50,7 +50,7 @@ pub fn list_capacity(n: u32) -> u64 {
 
 /// The most a list can hold: every voxel, within what one storage buffer may span and one
 /// allocation may take (each entry 4 bytes in the list and, but for --paper, 8 in what the
-/// gather leaves).
+/// gather leaves, 16 with the backs' light).
 pub fn list_capacity_limit(ctx: &Context, n: u32, paper: bool, backs: bool) -> u64 {
     let entry = match (paper, backs) {
         (true, _) => 4,

@@ -12,8 +12,6 @@ const FACES: [&str; 6] = ["nx", "px", "ny", "py", "nz", "pz"];
 
 pub struct Mip {
     base: Pass,
-    /// The base pass's push constant, if it has one (not --paper).
-    base_push: Option<[u8; 4]>,
     /// One instance per level from 1: reads level - 1, writes level.
     levels: Option<Pass>,
 }
@@ -40,9 +38,7 @@ impl Mip {
             .with(volumes.light_pos.as_ref(), |t, p| {
                 t.image_view("light_pos", p, p.level_view(0), Usage::Write)
             });
-        // Its push constant (not --paper's): whether the backs' volume covers the grid.
-        let push = if paper { 0 } else { 4 };
-        let base = Pass::compute(ctx, &variant("aniso_mip_base.comp", paper), &[], base, push)?;
+        let base = Pass::compute(ctx, &variant("aniso_mip_base.comp", paper), &[], base, 0)?;
 
         let tables: Vec<Bindings> = (1..volumes.grid.mip_levels())
             .map(|level| {
@@ -81,24 +77,15 @@ impl Mip {
                 0,
             )?)
         };
-        let base_push = (!paper).then(|| u32::from(volumes.holds_backs()).to_le_bytes());
-        Ok(Mip {
-            base,
-            base_push,
-            levels,
-        })
+        Ok(Mip { base, levels })
     }
 
     /// The directional volumes' base level from the radiance volume.
     pub fn record_base(&self, ctx: &Context, g: &mut Graph, volumes: &Volumes, name: &str) {
         let size = volumes.grid.aniso_resolution();
-        self.base.declare(g.pass(name), 0).record(|cmd| {
-            if let Some(push) = &self.base_push {
-                // Before the dispatch's bind: pushing needs only the pipeline's layout.
-                unsafe { self.base.pipeline.push(&ctx.device, cmd, push) };
-            }
-            dispatch(ctx, cmd, &self.base, 0, size)
-        });
+        self.base
+            .declare(g.pass(name), 0)
+            .record(|cmd| dispatch(ctx, cmd, &self.base, 0, size));
     }
 
     /// Each mip level of the directional volumes from the one before (a pass per level).

@@ -87,8 +87,8 @@ pub struct GiSettings {
     /// filled one (src/gi/empty_space.rs), lets a cone skip the samples that could read
     /// nothing. Not for `paper`.
     pub empty_space: bool,
-    /// A voxel of a surface facing one way with nothing behind it (a zero-thickness wall, a
-    /// quad) holds the light its back reflects apart, in a second radiance volume: lit
+    /// A voxel of a surface facing one way with open space behind it (a zero-thickness wall,
+    /// a quad; empty voxels for half the grid) holds the light its back reflects apart, in a second radiance volume: lit
     /// directly, gathering its own side in the bounces, and seen by cones from behind only
     /// (glsl/voxel_data.glsl, `open_back`). Not for `paper`, whose voxels shine every way.
     pub backs: bool,
