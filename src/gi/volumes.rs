@@ -238,8 +238,10 @@ impl Volumes {
         let texels = Texels::of(settings);
         let radiance = radiance_volume(ctx, n, texels, &mut info)?;
         let emit_dir = light_direction_volume(ctx, n, settings, &mut info)?;
-        let small_emission = small_emission_volume(ctx, n, settings, emissive, &mut info)?;
-        let back_radiance = back_radiance_volume(ctx, n, settings, &mut info)?;
+        let small_emission =
+            Optional::small_emission().make(ctx, n, settings, emissive, &mut info)?;
+        let back_radiance =
+            Optional::back_radiance().make(ctx, n, settings, settings.backs, &mut info)?;
         let (faces, face_bytes) = directional_volumes(ctx, grid, texels, &mut info)?;
         let light_dir = beside_directional(
             ctx,
@@ -341,9 +343,9 @@ fn light_direction_volume(
     Some(Image::new(ctx, "voxel light direction", desc)).transpose()
 }
 
-/// A full-resolution volume that only some scenes or settings use: the grid's size when
-/// `used`, else a one-texel stand-in (never read) that keeps the passes' bindings; listed in
-/// `info` (as `label`) only when used.
+/// A full-resolution volume that only some scenes or settings use (none for --paper): the
+/// grid's size when `used`, else a one-texel stand-in (never read) that keeps the passes'
+/// bindings; listed in `info` (as `label`) only when used.
 struct Optional {
     name: &'static str,
     label: &'static str,
@@ -353,13 +355,41 @@ struct Optional {
 }
 
 impl Optional {
+    /// Emission of emitters too small to be area lights (used when the voxels emit).
+    fn small_emission() -> Optional {
+        Optional {
+            name: "voxel emission of small emitters",
+            label: "voxel emission of small emitters (R32F)",
+            format: vk::Format::R32_SFLOAT,
+            texel_bytes: 4,
+            // Storage only: the inject pass writes it, the mip pass reads it, the readback
+            // copies it.
+            usage: vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
+        }
+    }
+
+    /// The backs' light (used with `GiSettings::backs`).
+    fn back_radiance() -> Optional {
+        Optional {
+            name: "voxel radiance of open backs",
+            label: "voxel radiance of open backs (RGBA16F)",
+            format: vk::Format::R16G16B16A16_SFLOAT,
+            texel_bytes: 8,
+            usage: volume_usage(),
+        }
+    }
+
     fn make(
         &self,
         ctx: &Arc<Context>,
         n: u32,
+        settings: &GiSettings,
         used: bool,
         info: &mut Vec<VolumeInfo>,
-    ) -> VkResult<Image> {
+    ) -> VkResult<Option<Image>> {
+        if settings.paper {
+            return Ok(None);
+        }
         if used {
             info.push(VolumeInfo {
                 name: self.label.into(),
@@ -367,51 +397,8 @@ impl Optional {
             });
         }
         let side = if used { n } else { 1 };
-        Image::new(ctx, self.name, ImageDesc::d3(self.format, side, self.usage))
+        Image::new(ctx, self.name, ImageDesc::d3(self.format, side, self.usage)).map(Some)
     }
-}
-
-/// Emission of emitters too small to be area lights (not for --paper; a stand-in without
-/// emitters).
-fn small_emission_volume(
-    ctx: &Arc<Context>,
-    n: u32,
-    settings: &GiSettings,
-    emissive: bool,
-    info: &mut Vec<VolumeInfo>,
-) -> VkResult<Option<Image>> {
-    if settings.paper {
-        return Ok(None);
-    }
-    let volume = Optional {
-        name: "voxel emission of small emitters",
-        label: "voxel emission of small emitters (R32F)",
-        format: vk::Format::R32_SFLOAT,
-        texel_bytes: 4,
-        // Storage only: the inject pass writes it, the mip pass reads it, the readback copies it.
-        usage: vk::ImageUsageFlags::STORAGE | vk::ImageUsageFlags::TRANSFER_SRC,
-    };
-    volume.make(ctx, n, emissive, info).map(Some)
-}
-
-/// The backs' light (not for --paper; a stand-in without `GiSettings::backs`).
-fn back_radiance_volume(
-    ctx: &Arc<Context>,
-    n: u32,
-    settings: &GiSettings,
-    info: &mut Vec<VolumeInfo>,
-) -> VkResult<Option<Image>> {
-    if settings.paper {
-        return Ok(None);
-    }
-    let volume = Optional {
-        name: "voxel radiance of open backs",
-        label: "voxel radiance of open backs (RGBA16F)",
-        format: vk::Format::R16G16B16A16_SFLOAT,
-        texel_bytes: 8,
-        usage: volume_usage(),
-    };
-    volume.make(ctx, n, settings.backs, info).map(Some)
 }
 
 /// Step 3's six directional volumes with their mips; also the bytes of one of them.
