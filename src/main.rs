@@ -1532,7 +1532,22 @@ fn one_line(e: &clap::Error) -> String {
     })
 }
 
+/// Output piped into a program that stops reading (`voxgi render --help | head`) ends the
+/// process quietly, as other command-line tools' does, instead of a panic in `println!`: Rust
+/// ignores SIGPIPE, so the write fails with EPIPE, and the print macros panic on that.
+#[cfg(unix)]
+fn quiet_broken_pipe() {
+    // SAFETY: restores the default action of one signal before any thread is started.
+    unsafe {
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+#[cfg(not(unix))]
+fn quiet_broken_pipe() {}
+
 fn main() -> ExitCode {
+    quiet_broken_pipe();
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {

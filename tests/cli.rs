@@ -373,3 +373,25 @@ fn bench_help_names_every_sweep_axis() {
         );
     }
 }
+
+/// Output into a pipe nobody reads (`voxgi render --help | head -1` once head has gone) ends
+/// the program quietly, as other tools do: no panic. The pipe's reading end is closed before
+/// voxgi starts, so its first write fails.
+#[test]
+#[cfg(unix)]
+fn output_into_a_closed_pipe_ends_quietly() {
+    use std::os::unix::process::ExitStatusExt;
+    for args in [&["render", "--help"][..], &["info", "--help"]] {
+        let (reader, writer) = std::io::pipe().expect("pipe");
+        drop(reader);
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_voxgi"))
+            .args(args)
+            .stdout(writer)
+            .stderr(std::process::Stdio::piped())
+            .output()
+            .expect("run voxgi");
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(!stderr.contains("panicked"), "{args:?} panicked:\n{stderr}");
+        assert_eq!(o.status.signal(), Some(13), "{args:?}: ended by SIGPIPE");
+    }
+}
