@@ -61,7 +61,7 @@ vec4 facing(vec4 v, vec3 dir, float small, int face) {
 // side lies in front of, and the mean let the wall's light and theirs through to the dark
 // side's cones (hard case leak-junction, 1.2% where its goal is 1%). There the lit and the
 // dark side lie within a voxel of each other, so such a wall's plane weighs THIN_PLANE times
-// its light: leak-junction 0.0122 -> 0.0034, every other leak case halved (docs/hard-cases.md).
+// its light: leak-junction 0.0122 -> 0.0038, every other leak case halved (docs/hard-cases.md).
 // Only as far as its light goes one way (the length of its light's direction: 1 when one side
 // is lit, shorter as the other side's share grows, or as its lights come from apart): a thin
 // wall lit on both sides has no plane to keep, and weighing it more hid the light inside
