@@ -4,33 +4,26 @@
 // 2x2x2 block of the radiance volume. PAPER: every voxel shines the same every way. Default: a
 // voxel's light shows in a face volume only as far as it goes that way (facing() below).
 #include "aniso_mip.glsl"
-#ifndef PAPER
-// The voxels themselves (set 1's bindings 0 and 2), for which of them are thin (two-sided).
-#include "common.glsl"
-#include "voxel_common.glsl"
-#define VOXEL_SET 1
-#include "voxel_data.glsl"
-#endif
 
 layout(local_size_x = 4, local_size_y = 4, local_size_z = 4) in;
 
-layout(set = 1, binding = 4, VOLUME_FORMAT) uniform readonly image3D radiance;
-layout(set = 1, binding = 5, VOLUME_FORMAT) uniform writeonly image3D face_nx;
-layout(set = 1, binding = 6, VOLUME_FORMAT) uniform writeonly image3D face_px;
-layout(set = 1, binding = 7, VOLUME_FORMAT) uniform writeonly image3D face_ny;
-layout(set = 1, binding = 8, VOLUME_FORMAT) uniform writeonly image3D face_py;
-layout(set = 1, binding = 9, VOLUME_FORMAT) uniform writeonly image3D face_nz;
-layout(set = 1, binding = 10, VOLUME_FORMAT) uniform writeonly image3D face_pz;
+layout(set = 0, binding = 0, VOLUME_FORMAT) uniform readonly image3D radiance;
+layout(set = 0, binding = 1, VOLUME_FORMAT) uniform writeonly image3D face_nx;
+layout(set = 0, binding = 2, VOLUME_FORMAT) uniform writeonly image3D face_px;
+layout(set = 0, binding = 3, VOLUME_FORMAT) uniform writeonly image3D face_ny;
+layout(set = 0, binding = 4, VOLUME_FORMAT) uniform writeonly image3D face_py;
+layout(set = 0, binding = 5, VOLUME_FORMAT) uniform writeonly image3D face_nz;
+layout(set = 0, binding = 6, VOLUME_FORMAT) uniform writeonly image3D face_pz;
 #ifndef PAPER
-layout(set = 1, binding = 11, rgba8_snorm) uniform readonly image3D emit_dir;
-layout(set = 1, binding = 12, rgba16f) uniform writeonly image3D light_dir;
-layout(set = 1, binding = 13, rgba16f) uniform writeonly image3D light_pos;
+layout(set = 0, binding = 7, rgba8_snorm) uniform readonly image3D emit_dir;
+layout(set = 0, binding = 8, rgba16f) uniform writeonly image3D light_dir;
+layout(set = 0, binding = 9, rgba16f) uniform writeonly image3D light_pos;
 // The luminance of each voxel's light that comes from emitters smaller than it
 // (inject_radiance.comp); one texel, not read, when the scene emits nothing.
-layout(set = 1, binding = 14, r32f) uniform readonly image3D small_emission;
+layout(set = 0, binding = 10, r32f) uniform readonly image3D small_emission;
 // The light of open backs (inject_radiance.comp), going against emit_dir; one texel, not read,
 // without GiSettings::backs.
-layout(set = 1, binding = 15, rgba16f) uniform readonly image3D back_radiance;
+layout(set = 0, binding = 11, rgba16f) uniform readonly image3D back_radiance;
 #endif
 
 #ifndef PAPER
@@ -52,24 +45,6 @@ vec4 facing(vec4 v, vec3 dir, float small, int face) {
     vec3 towards = face_towards(face);
     float shown = seen_from(dir, towards) * (1.0 - small * (1.0 - small_emitter_shown(dir, towards)));
     return vec4(v.rgb * shown, v.a);
-}
-
-// Where a texel's surfaces lie and where their light goes (light_pos, light_dir) is the mean of
-// its voxels' planes weighted by their light, and a cone's sample blends the eight texels
-// around it: a sample beside a thin wall whose two faces share a voxel (two-sided) blends the
-// wall's texel, on the dark side, with the lit side's floor and walls, whose planes the dark
-// side lies in front of, and the mean let the wall's light and theirs through to the dark
-// side's cones (hard case leak-junction, 1.2% where its goal is 1%). There the lit and the
-// dark side lie within a voxel of each other, so such a wall's plane weighs THIN_PLANE times
-// its light: leak-junction 0.0122 -> 0.0038, every other leak case halved (docs/hard-cases.md).
-// Only as far as its light goes one way (the length of its light's direction: 1 when one side
-// is lit, shorter as the other side's share grows, or as its lights come from apart): a thin
-// wall lit on both sides has no plane to keep, and weighing it more hid the light inside
-// CornellBox-nvpro's box of 10 cm walls under a sun.
-const float THIN_PLANE = 10.0;
-float plane_weight(ivec3 s, vec3 dir) {
-    float one_way = smoothstep(0.9, 1.0, length(dir));
-    return one_way > 0.0 && voxel_two_sided(s) ? 1.0 + (THIN_PLANE - 1.0) * one_way : 1.0;
 }
 #endif
 
@@ -117,14 +92,11 @@ void main() {
     vec4 lies = vec4(0.0);
     float n = float(imageSize(radiance).x);
     for (int i = 0; i < 8; i++) {
-        ivec3 s = 2 * c + ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1);
-        float lb = luminance(back[i]);
-        float l = luminance(block[i].rgb) + lb;
-        // A thin surface lit on one side weighs up to THIN_PLANE times its light.
-        float k = plane_weight(s, dirs[i].xyz);
-        l *= k;
-        lb *= k;
+        // Rec. 709 luminance, as common.glsl's luminance() (whose bindings clash with this pass's).
+        float lb = dot(back[i], vec3(0.2126, 0.7152, 0.0722));
+        float l = dot(block[i].rgb, vec3(0.2126, 0.7152, 0.0722)) + lb;
         going += vec4(dirs[i].xyz * l, l);
+        ivec3 s = 2 * c + ivec3(i & 1, (i >> 1) & 1, (i >> 2) & 1);
         vec3 g = dot(dirs[i].xyz, dirs[i].xyz) > 0.0 ? normalize(dirs[i].xyz) : vec3(0.0);
         lies += vec4(l * (vec3(s) + 0.5 + dirs[i].w * g) / n, lb);
     }

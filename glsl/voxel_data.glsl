@@ -54,24 +54,6 @@ bool voxel_filled(ivec3 c) {
     return count > 0u;
 }
 
-// Whether a filled voxel's surfaces face apart (load_voxel's agreement < 0.5: a thin panel's two
-// faces), from its count and normal sums alone.
-bool voxel_two_sided(ivec3 c) {
-    uint i = voxel_index(c) * ALBEDO_STRIDE;
-    uint k = voxel_index(c) * NORMAL_STRIDE;
-    Words sa = Words(static_words[WORDS_ALBEDO]);
-    Words sn = Words(static_words[WORDS_NORMAL]);
-    uint count = sa.w[i];
-    ivec3 n = ivec3(sn.w[k], sn.w[k + 1u], sn.w[k + 2u]);
-    if ((frame.grid_info.w & FLAG_DYNAMIC) != 0u) {
-        Words da = Words(dynamic_words[WORDS_ALBEDO]);
-        Words dn = Words(dynamic_words[WORDS_NORMAL]);
-        count += da.w[i];
-        n += ivec3(dn.w[k], dn.w[k + 1u], dn.w[k + 2u]);
-    }
-    return count > 0u && length(vec3(n)) < 0.5 * float(count) * FIXED_ONE;
-}
-
 Voxel load_voxel(ivec3 c) {
     Voxel v;
     uint i = voxel_index(c) * ALBEDO_STRIDE;

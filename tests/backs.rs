@@ -26,6 +26,15 @@ fn settings(size: u32, backs: bool, bounces: u32, mode: Mode) -> RenderSettings 
     }
 }
 
+/// A quad with its front towards `facing`, whatever order `corners` go round in.
+fn quad_facing(s: &mut Scene, mut corners: [Vec3; 4], facing: Vec3, material: u32) {
+    let n = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
+    if n.dot(facing) < 0.0 {
+        corners.reverse();
+    }
+    quad(s, corners, material);
+}
+
 /// A closed 4 x 2.5 x 4 m room of six single quads, all facing in or all facing out, lit by a
 /// point light inside and seen from inside.
 fn quad_room(outward: bool) -> Scene {

@@ -2,9 +2,9 @@
 //! resolution, then each of their mip levels from the one before; beside them (not --paper),
 //! where their light goes.
 
-use super::inject::{read_voxel_data, variant};
+use super::inject::variant;
 use super::volumes::Volumes;
-use crate::vk::{vk, Bindings, Context, Graph, Pass, SharedSet, Usage, VkResult};
+use crate::vk::{vk, Bindings, Context, Graph, Pass, Usage, VkResult};
 use std::sync::Arc;
 
 /// The directional volumes' names in the shaders, in the order of `Volumes::faces`.
@@ -17,19 +17,8 @@ pub struct Mip {
 }
 
 impl Mip {
-    pub fn new(
-        ctx: &Arc<Context>,
-        scene: &SharedSet,
-        volumes: &Volumes,
-        paper: bool,
-    ) -> VkResult<Mip> {
-        // The voxels: which are thin (aniso_mip_base.comp's plane_weight); not for --paper.
-        let base = if paper {
-            Bindings::new()
-        } else {
-            read_voxel_data(Bindings::new(), volumes)
-        };
-        let mut base = base.image("radiance", &volumes.radiance, Usage::Read);
+    pub fn new(ctx: &Arc<Context>, volumes: &Volumes, paper: bool) -> VkResult<Mip> {
+        let mut base = Bindings::new().image("radiance", &volumes.radiance, Usage::Read);
         for (f, name) in volumes.faces.iter().zip(FACES) {
             base = base.image_view(&format!("face_{name}"), f, f.level_view(0), Usage::Write);
         }
@@ -49,13 +38,7 @@ impl Mip {
             .with(volumes.light_pos.as_ref(), |t, p| {
                 t.image_view("light_pos", p, p.level_view(0), Usage::Write)
             });
-        let base = Pass::compute(
-            ctx,
-            &variant("aniso_mip_base.comp", paper),
-            &[scene],
-            base,
-            0,
-        )?;
+        let base = Pass::compute(ctx, &variant("aniso_mip_base.comp", paper), &[], base, 0)?;
 
         let tables: Vec<Bindings> = (1..volumes.grid.mip_levels())
             .map(|level| {
@@ -98,18 +81,11 @@ impl Mip {
     }
 
     /// The directional volumes' base level from the radiance volume.
-    pub fn record_base(
-        &self,
-        ctx: &Context,
-        g: &mut Graph,
-        volumes: &Volumes,
-        scene_set: vk::DescriptorSet,
-        name: &str,
-    ) {
+    pub fn record_base(&self, ctx: &Context, g: &mut Graph, volumes: &Volumes, name: &str) {
         let size = volumes.grid.aniso_resolution();
         self.base
             .declare(g.pass(name), 0)
-            .record(|cmd| dispatch(ctx, cmd, &self.base, &[(0, scene_set)], 0, size));
+            .record(|cmd| dispatch(ctx, cmd, &self.base, 0, size));
     }
 
     /// Each mip level of the directional volumes from the one before (a pass per level).
@@ -122,23 +98,16 @@ impl Mip {
             let instance = level as usize - 1;
             let size = (m >> level).max(1);
             p.declare(g.pass(name), instance)
-                .record(|cmd| dispatch(ctx, cmd, p, &[], instance, size));
+                .record(|cmd| dispatch(ctx, cmd, p, instance, size));
         }
     }
 }
 
-/// Binds instance `instance` of `p` (and the shared sets) and dispatches over a `size`^3 volume.
-fn dispatch(
-    ctx: &Context,
-    cmd: vk::CommandBuffer,
-    p: &Pass,
-    shared: &[(u32, vk::DescriptorSet)],
-    instance: usize,
-    size: u32,
-) {
+/// Binds instance `instance` of `p` and dispatches over a `size`^3 volume.
+fn dispatch(ctx: &Context, cmd: vk::CommandBuffer, p: &Pass, instance: usize, size: u32) {
     let groups = size.div_ceil(4);
     unsafe {
-        p.bind(&ctx.device, cmd, shared, instance);
+        p.bind(&ctx.device, cmd, &[], instance);
         ctx.device.cmd_dispatch(cmd, groups, groups, groups);
     }
 }

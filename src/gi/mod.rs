@@ -694,7 +694,7 @@ impl Gi {
         let lighting = if light_voxels {
             Some((
                 Inject::new(ctx, scene_set, &volumes, inputs.shadow_maps, paper)?,
-                Mip::new(ctx, scene_set, &volumes, paper)?,
+                Mip::new(ctx, &volumes, paper)?,
             ))
         } else {
             None
@@ -854,7 +854,7 @@ impl Gi {
                     .record_voxelize(ctx, g, v, input.geometry, dynamic, &name, draw)
             }
             Step::Inject { .. } => lighting().0.record(ctx, g, v, input.scene_set, &name),
-            Step::MipBase { .. } => lighting().1.record_base(ctx, g, v, input.scene_set, &name),
+            Step::MipBase { .. } => lighting().1.record_base(ctx, g, v, &name),
             Step::MipLevels { .. } => lighting().1.record_levels(ctx, g, v, &name),
             Step::EmptySpace => {
                 let e = self

@@ -73,6 +73,24 @@ pub static CASES: &[Case] = &[
         run: junction_leak,
     },
     Case {
+        name: "door-room",
+        group: "light leaking",
+        what: "leak-junction's rooms with a door 1 m wide and 2 m high in the divider, seen \
+               from the room the light reaches through it; relMSE against the reference, the \
+               worst of the divider on a voxel boundary and 2 cm off it",
+        metric: "relMSE",
+        goal: Goal::AtMost(0.05),
+        run: |env, gi| {
+            let mut worst = 0.0f64;
+            for offset in [0.0, 0.02] {
+                let (b, _, dark_cam) = junction_rooms(offset, true);
+                let s = env.load("door", &b)?;
+                worst = worst.max(env.error_vs_reference(&s, &dark_cam, gi)?);
+            }
+            Ok(worst)
+        },
+    },
+    Case {
         name: "density-300",
         group: "density",
         what: "300 overlapping triangles in one voxel; largest relative error of a voxel's \
@@ -524,7 +542,7 @@ fn leak(
 fn junction_leak(env: &mut Env, gi: &GiSettings) -> Result<f64> {
     let mut worst = 0.0f64;
     for offset in [0.0, 0.02, 0.048] {
-        let (b, lit_cam, dark_cam) = junction_rooms(offset);
+        let (b, lit_cam, dark_cam) = junction_rooms(offset, false);
         let s = env.load("junction", &b)?;
         let lit = mean(&env.render(&s, &lit_cam, gi)?);
         let dark = mean(&env.render(&s, &dark_cam, gi)?);

@@ -171,18 +171,30 @@ pub fn two_rooms(
 /// Two 3 x 2.5 x 4 m rooms side by side along x, their floor, ceiling and side walls one
 /// surface each, split by a zero-thickness divider at `x = offset` (two faces in one plane)
 /// whose edges go 1 cm into the floor, the ceiling and the side walls; a point light of 20 W/sr
-/// hangs at mid-height 30 cm from the divider on the negative side. Returns the scene and the
-/// camera of each room (lit, dark), each 10 cm from its end wall looking at the divider.
-pub fn junction_rooms(offset: f32) -> (SceneBuilder, Camera, Camera) {
+/// hangs at mid-height 30 cm from the divider on the negative side. With `door`, the divider
+/// has a door 1 m wide and 2 m high (z from 0.5 to 1.5 m). Returns the scene and the camera of
+/// each room (lit, dark), each 10 cm from its end wall looking at the divider.
+pub fn junction_rooms(offset: f32, door: bool) -> (SceneBuilder, Camera, Camera) {
     let mut b = SceneBuilder::new();
     let white = b.add_material(MaterialDesc::lambertian("white", WHITE));
     let (lo, hi) = ([-3.0, 0.0, -2.0], [3.0, 2.5, 2.0]);
     let (dlo, dhi) = ([lo[0], -0.01, -2.01], [hi[0], 2.51, 2.01]);
-    let walls = merge(&[
-        inward_box(lo, hi, white),
-        slab_face(dlo, dhi, 0, offset, -1.0, white),
-        slab_face(dlo, dhi, 0, offset, 1.0, white),
-    ]);
+    // The divider's pieces: whole, or around the door.
+    let pieces = if door {
+        vec![
+            (dlo, [dhi[0], dhi[1], 0.5]),
+            ([dlo[0], dlo[1], 1.5], dhi),
+            ([dlo[0], 2.0, 0.5], [dhi[0], dhi[1], 1.5]),
+        ]
+    } else {
+        vec![(dlo, dhi)]
+    };
+    let mut faces = vec![inward_box(lo, hi, white)];
+    for (plo, phi) in pieces {
+        faces.push(slab_face(plo, phi, 0, offset, -1.0, white));
+        faces.push(slab_face(plo, phi, 0, offset, 1.0, white));
+    }
+    let walls = merge(&faces);
     let mesh = b.add_mesh("rooms", vec![walls]);
     b.add_node(NodeDesc::new("rooms").mesh(mesh));
     let light = b.add_light(LightDesc::new("light", LightType::Point, [1.0; 3], 20.0));

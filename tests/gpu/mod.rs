@@ -91,15 +91,6 @@ pub fn quad(scene: &mut Scene, corners: [Vec3; 4], material: u32) {
     add_instance(scene, first, 6, material, bounds);
 }
 
-/// A quad with its front towards `facing`, whatever order `corners` go round in.
-pub fn quad_facing(s: &mut Scene, mut corners: [Vec3; 4], facing: Vec3, material: u32) {
-    let n = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
-    if n.dot(facing) < 0.0 {
-        corners.reverse();
-    }
-    quad(s, corners, material);
-}
-
 /// Adds indices [first, first + count) as a primitive placed once, at the identity.
 fn add_instance(scene: &mut Scene, first: u32, count: u32, material: u32, bounds: Aabb) -> usize {
     scene.primitives.push(Primitive {
