@@ -24,6 +24,11 @@ layout(set = 0, binding = 10, r32f) uniform readonly image3D small_emission;
 // The light of open backs (inject_radiance.comp), going against emit_dir; one texel, not read,
 // without GiSettings::backs.
 layout(set = 0, binding = 11, rgba16f) uniform readonly image3D back_radiance;
+// The thin walls per axis: where they lie (times their cover) and how much of the texel's
+// cross-section they cover; x and y, then z (Volumes::thin_walls). One texel, not written,
+// without a bounce.
+layout(set = 0, binding = 12, rgba16f) uniform writeonly image3D thin_walls_xy;
+layout(set = 0, binding = 13, rgba16f) uniform writeonly image3D thin_walls_z;
 #endif
 
 #ifndef PAPER
@@ -45,6 +50,44 @@ vec4 facing(vec4 v, vec3 dir, float small, int face) {
     vec3 towards = face_towards(face);
     float shown = seen_from(dir, towards) * (1.0 - small * (1.0 - small_emitter_shown(dir, towards)));
     return vec4(v.rgb * shown, v.a);
+}
+
+// The thin walls around texel c: a filled voxel with empty voxels on both sides along the axis
+// it faces most (by its light's direction: a one-sided voxel's normal, a thin wall's lit side),
+// within the grid, covers its column along each axis as much as it faces that axis; four
+// columns a block. Along each axis the block reaches a voxel further on either side, so that a
+// sample beside a wall reads its whole cover. Where they lie: the voxels' surfaces (emit_dir.w
+// along the direction from the centre), weighted by their cover.
+void thin_walls(ivec3 c) {
+    ivec3 size = imageSize(radiance);
+    float n = float(size.x);
+    vec3 cover = vec3(0.0), at = vec3(0.0);
+    for (int i = 0; i < 64; i++) {
+        ivec3 o = ivec3(i & 3, (i >> 2) & 3, i >> 4);
+        ivec3 s = 2 * c - 1 + o;
+        if (any(lessThan(s, ivec3(0))) || any(greaterThanEqual(s, size))) continue;
+        if (imageLoad(radiance, s).a <= 0.0) continue;
+        vec4 e = imageLoad(emit_dir, s);
+        float dd = dot(e.xyz, e.xyz);
+        if (dd == 0.0) continue;
+        vec3 faces = e.xyz * e.xyz / dd;
+        int k = faces.x >= max(faces.y, faces.z) ? 0 : (faces.y >= faces.z ? 1 : 2);
+        ivec3 step_k = ivec3(0);
+        step_k[k] = 1;
+        ivec3 below = s - step_k, above = s + step_k;
+        if (any(lessThan(below, ivec3(0))) || any(greaterThanEqual(above, size))) continue;
+        if (imageLoad(radiance, below).a > 0.0 || imageLoad(radiance, above).a > 0.0) continue;
+        // Inside the block across each axis: o is 1 or 2 along the other two.
+        bvec3 inside = bvec3(o.x == 1 || o.x == 2, o.y == 1 || o.y == 2, o.z == 1 || o.z == 2);
+        vec3 across = vec3(inside.y && inside.z, inside.x && inside.z, inside.x && inside.y);
+        vec3 lies = (vec3(s) + 0.5 + e.w * e.xyz * inversesqrt(dd)) / n;
+        cover += faces * across;
+        at += faces * across * lies;
+    }
+    at /= max(cover, vec3(1e-6));  // 0 where nothing covers
+    cover = min(cover * 0.25, vec3(1.0));
+    imageStore(thin_walls_xy, c, vec4(cover.x * at.x, cover.x, cover.y * at.y, cover.y));
+    imageStore(thin_walls_z, c, vec4(cover.z * at.z, cover.z, 0.0, 0.0));
 }
 #endif
 
@@ -102,6 +145,7 @@ void main() {
     }
     imageStore(light_dir, c, going * 0.125);
     imageStore(light_pos, c, lies * 0.125);
+    if (imageSize(thin_walls_xy) == imageSize(face_nx)) thin_walls(c);
     for (int face = 0; face < 6; face++) {
         vec4 shown[8];
         for (int i = 0; i < 8; i++) {

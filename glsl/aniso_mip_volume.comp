@@ -23,6 +23,12 @@ layout(set = 0, binding = 12, rgba16f) uniform readonly image3D src_dir;
 layout(set = 0, binding = 13, rgba16f) uniform writeonly image3D dst_dir;
 layout(set = 0, binding = 14, rgba16f) uniform readonly image3D src_pos;
 layout(set = 0, binding = 15, rgba16f) uniform writeonly image3D dst_pos;
+// The thin walls (aniso_mip_base.comp); one texel, bound both ways and skipped, without a
+// bounce.
+layout(set = 0, binding = 16, rgba16f) uniform readonly image3D src_thin_walls_xy;
+layout(set = 0, binding = 17, rgba16f) uniform writeonly image3D dst_thin_walls_xy;
+layout(set = 0, binding = 18, rgba16f) uniform readonly image3D src_thin_walls_z;
+layout(set = 0, binding = 19, rgba16f) uniform writeonly image3D dst_thin_walls_z;
 #endif
 
 #ifdef PAPER
@@ -98,5 +104,32 @@ void main() {
     float n = float(count.x * count.y * count.z);
     imageStore(dst_dir, c, going / n);
     imageStore(dst_pos, c, lies / n);
+    // The thin walls' cover per axis: the block's columns along it, each covered by the texels
+    // it holds one after another (their covers added, up to 1), averaged; along the axis the
+    // block reaches a texel further on either side, as the base level's. Where they lie:
+    // weighted by their cover.
+    if (imageSize(src_thin_walls_xy) != src) return;
+    vec3 cover = vec3(0.0), at = vec3(0.0);
+    for (int x = lo.x - 1; x <= hi.x + 1; x++) {
+        for (int y = lo.y - 1; y <= hi.y + 1; y++) {
+            for (int z = lo.z - 1; z <= hi.z + 1; z++) {
+                ivec3 t = ivec3(x, y, z);
+                if (any(lessThan(t, ivec3(0))) || any(greaterThanEqual(t, src))) continue;
+                bvec3 inside = bvec3(x >= lo.x && x <= hi.x, y >= lo.y && y <= hi.y,
+                                     z >= lo.z && z <= hi.z);
+                vec3 across = vec3(inside.y && inside.z, inside.x && inside.z,
+                                   inside.x && inside.y);
+                vec4 wxy = imageLoad(src_thin_walls_xy, t);
+                vec2 wz = imageLoad(src_thin_walls_z, t).xy;
+                cover += across * vec3(wxy.y, wxy.w, wz.y);
+                at += across * vec3(wxy.x, wxy.z, wz.x);
+            }
+        }
+    }
+    at /= max(cover, vec3(1e-6));  // 0 where nothing covers
+    vec3 columns = vec3(count.y * count.z, count.x * count.z, count.x * count.y);
+    cover = min(cover / columns, vec3(1.0));
+    imageStore(dst_thin_walls_xy, c, vec4(cover.x * at.x, cover.x, cover.y * at.y, cover.y));
+    imageStore(dst_thin_walls_z, c, vec4(cover.z * at.z, cover.z, 0.0, 0.0));
 #endif
 }

@@ -2,9 +2,14 @@
 // volumes at the mip level whose texels match the cone's diameter, and composite front to back
 // (PAPER: "over"; default: added up until opaque, see trace_cone).
 // Define CONE_SET (descriptor set) and CONE_FULL_RES (1: the full-resolution radiance volume is
-// bound and mixed in for cones narrower than the directional volumes' texels) before including.
+// bound and mixed in for cones narrower than the directional volumes' texels) before including;
+// CONE_THIN_WALLS 1: the thin walls are bound and hide what lies behind them (the bounce's
+// cones, see thin_wall_between).
 #ifndef CONE_TRACING_GLSL
 #define CONE_TRACING_GLSL
+#ifndef CONE_THIN_WALLS
+#define CONE_THIN_WALLS 0
+#endif
 
 #include "aniso_mip.glsl"
 #include "environment.glsl"
@@ -30,6 +35,11 @@ layout(set = CONE_SET, binding = 9) uniform sampler3D light_pos;
 // Per cell of frame.tuning.w voxels, the distance in cells to the nearest cell that holds a
 // filled voxel (empty_space.comp).
 layout(set = CONE_SET, binding = 10, r32ui) uniform readonly uimage3D empty_space;
+#if CONE_THIN_WALLS
+// Where the thin walls lie per axis and how much of a texel they cover (Volumes::thin_walls).
+layout(set = CONE_SET, binding = 12) uniform sampler3D thin_walls_xy;
+layout(set = CONE_SET, binding = 13) uniform sampler3D thin_walls_z;
+#endif
 #endif
 
 #ifndef PAPER
@@ -40,6 +50,47 @@ float seen_along(vec3 going, vec3 dir) {
     return w.x * seen_from(going, vec3(-sign(dir.x), 0.0, 0.0))
          + w.y * seen_from(going, vec3(0.0, -sign(dir.y), 0.0))
          + w.z * seen_from(going, vec3(0.0, 0.0, -sign(dir.z)));
+}
+#endif
+
+#if CONE_THIN_WALLS && !defined(PAPER)
+// How much of a sample's light thin walls hide from the cone's origin `from`, the sample's light
+// taken as lying at `light` (its light-weighted mean; all in grid units). A face volume
+// composites its texels along its own axis only, and a sample blends texels on both sides of
+// a wall: across a divider one voxel thick whose floor, ceiling and side walls run on into the
+// room beyond, the dark room's voxels gathered the lit room's floor and walls through the
+// volumes of the other axes, whose planes they lie in front of, and their bounces carried it
+// on (hard case leak-junction: 1.2% of the lit room's light). A wall hides the light beyond its
+// plane, as much as it covers the texels where the line from the origin to the light crosses
+// that plane, read two levels finer than the sample: a coarse texel's plane can be the mean of
+// two walls (a room's floor and ceiling) where there is none, and a door in a wall is no wall
+// (hard case door-room). The origin at least a quarter of a voxel in front of the plane, the
+// light from half a voxel to a voxel beyond it: a voxel's light lies at its centre across its
+// surface, up to half a voxel past the wall it meets at a corner.
+float thin_wall_between(vec3 uvw, float level, vec3 from, vec3 light) {
+    vec4 wxy = textureLod(thin_walls_xy, uvw, level);
+    vec2 wz = textureLod(thin_walls_z, uvw, level).xy;
+    vec3 cover = vec3(wxy.y, wxy.w, wz.y);
+    if (all(equal(cover, vec3(0.0)))) return 0.0;
+    vec3 at = vec3(wxy.x, wxy.z, wz.x) / max(cover, vec3(1e-6));
+    // A quarter of a voxel, but no less than the half floats' steps near 1 (2^-11) allow.
+    float m = max(0.25 / float(grid_n()), 1.0 / 1024.0);
+    vec3 to_volume = vec3(float(grid_n()) / float(2 * textureSize(aniso_nx, 0).x));
+    float fine = max(level - 2.0, 0.0);
+    float kept = 1.0;
+    for (int k = 0; k < 3; k++) {
+        // The light beyond the sample's plane, seen from the origin.
+        if (cover[k] <= 0.0 || (at[k] - light[k]) * sign(from[k] - at[k]) <= 0.0) continue;
+        vec3 p = from + (light - from) * ((at[k] - from[k]) / (light[k] - from[k]));
+        vec4 f = textureLod(thin_walls_xy, p * to_volume, fine);
+        vec2 w = k == 0 ? f.xy : (k == 1 ? f.zw : textureLod(thin_walls_z, p * to_volume, fine).xy);
+        float wall = w.x / max(w.y, 1e-6);
+        float side = sign(from[k] - wall);
+        float beyond = clamp((wall - light[k]) * side / (2.0 * m) - 1.0, 0.0, 1.0);
+        float in_front = clamp(abs(from[k] - wall) / m, 0.0, 1.0);
+        kept *= 1.0 - min(w.y, 1.0) * beyond * in_front;
+    }
+    return 1.0 - kept;
 }
 #endif
 
@@ -83,6 +134,9 @@ vec4 sample_directional(vec3 uvw, vec3 dir, float level, vec3 from, bool from_or
         if (going.w > 0.0) {
             vec3 g = going.xyz / going.w;
             vec4 lies = textureLod(light_pos, uvw, level) / going.w;
+#if CONE_THIN_WALLS
+            s.rgb *= 1.0 - thin_wall_between(uvw, level, from, lies.xyz);
+#endif
             float ahead = dot(from - lies.xyz, g) * float(4 * grid_n());
             float shown = clamp(1.0 + ahead, 0.0, 1.0);
             if (lies.w > 0.0) {

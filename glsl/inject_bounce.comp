@@ -14,6 +14,7 @@
 #include "voxel_data.glsl"
 #define CONE_SET 2
 #define CONE_FULL_RES 0
+#define CONE_THIN_WALLS 1
 #include "cone_tracing.glsl"
 #include "bounce_common.glsl"
 

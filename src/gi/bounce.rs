@@ -91,6 +91,10 @@ pub fn cone_volumes(table: Bindings, volumes: &Volumes, full_res: bool) -> Bindi
     .with(volumes.light_pos.as_ref(), |t, p| {
         t.sampled("light_pos", p, s)
     })
+    .with(volumes.thin_walls.as_ref(), |t, [a, b]| {
+        t.sampled("thin_walls_xy", a, s)
+            .sampled("thin_walls_z", b, s)
+    })
     .with(volumes.empty_space.as_ref(), |t, e| {
         t.image("empty_space", e, Usage::Read)
     })

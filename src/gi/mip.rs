@@ -37,12 +37,17 @@ impl Mip {
             })
             .with(volumes.light_pos.as_ref(), |t, p| {
                 t.image_view("light_pos", p, p.level_view(0), Usage::Write)
+            })
+            .with(volumes.thin_walls.as_ref(), |t, [a, b]| {
+                t.image_view("thin_walls_xy", a, a.level_view(0), Usage::Write)
+                    .image_view("thin_walls_z", b, b.level_view(0), Usage::Write)
             });
         let base = Pass::compute(ctx, &variant("aniso_mip_base.comp", paper), &[], base, 0)?;
 
         let tables: Vec<Bindings> = (1..volumes.grid.mip_levels())
             .map(|level| {
-                // Level - 1 read, level written: one image bound twice.
+                // Level - 1 read, level written: one image bound twice (a one-texel stand-in,
+                // the thin walls without a bounce, its one view both ways; the pass skips it).
                 let pair = |t: Bindings, name: &str, img: &crate::vk::Image| {
                     t.image_view(
                         &format!("src_{name}"),
@@ -63,6 +68,9 @@ impl Mip {
                 }
                 t.with(volumes.light_dir.as_ref(), |t, d| pair(t, "dir", d))
                     .with(volumes.light_pos.as_ref(), |t, p| pair(t, "pos", p))
+                    .with(volumes.thin_walls.as_ref(), |t, [a, b]| {
+                        pair(pair(t, "thin_walls_xy", a), "thin_walls_z", b)
+                    })
             })
             .collect();
         let levels = if tables.is_empty() {

@@ -197,6 +197,13 @@ pub struct Volumes {
     /// front of the plane it leaves (a thin wall's lit face, which shares texels with the dark
     /// room beside it). None for --paper.
     pub light_pos: Option<Image>,
+    /// Beside them, the thin walls (surfaces one voxel thick with empty voxels on both sides):
+    /// per axis, how much of a texel's cross-section along it they cover (up to 1) and where
+    /// along it they lie (grid units 0 to 1, times the cover); x and y in the first volume
+    /// (x position, x cover, y position, y cover), z in the second. The bounce's cones do not
+    /// see light behind a thin wall from their origin (glsl/cone_tracing.glsl's
+    /// thin_wall_between). One-texel stand-ins, never read, without a bounce; None for --paper.
+    pub thin_walls: Option<[Image; 2]>,
     /// Per cell of `grid.empty_space_cell()` voxels a side, the distance in cells to the
     /// nearest cell that holds a filled voxel (R32UI; src/gi/empty_space.rs). None for --paper;
     /// a one-texel stand-in, never read, without `GiSettings::empty_space`.
@@ -253,6 +260,7 @@ impl Volumes {
         )?;
         let light_pos =
             beside_directional(ctx, grid, settings, face_bytes, "light position", &mut info)?;
+        let thin_walls = thin_wall_volumes(ctx, grid, settings, face_bytes, &mut info)?;
         let empty_space = empty_space_volume(ctx, grid, settings, &mut info)?;
         let sampler = volume_sampler(ctx, settings.paper)?;
         let [s, d] = data.tables();
@@ -271,6 +279,7 @@ impl Volumes {
             faces,
             light_dir,
             light_pos,
+            thin_walls,
             empty_space,
             sampler,
             info,
@@ -449,6 +458,33 @@ fn beside_directional(
         bytes: face_bytes,
     });
     Image::new(ctx, &format!("directional {what}"), desc).map(Some)
+}
+
+/// The thin walls' two volumes beside the directional volumes (`Volumes::thin_walls`), or
+/// one-texel stand-ins without a bounce (the mip passes keep their bindings and skip them).
+fn thin_wall_volumes(
+    ctx: &Arc<Context>,
+    grid: VoxelGrid,
+    settings: &GiSettings,
+    face_bytes: u64,
+    info: &mut Vec<VolumeInfo>,
+) -> VkResult<Option<[Image; 2]>> {
+    if settings.paper {
+        return Ok(None);
+    }
+    let make = |what: &str, info: &mut Vec<VolumeInfo>| {
+        if settings.bounces >= 2 {
+            beside_directional(ctx, grid, settings, face_bytes, what, info)
+                .map(|i| i.expect("not --paper"))
+        } else {
+            let desc = ImageDesc::d3(vk::Format::R16G16B16A16_SFLOAT, 1, volume_usage());
+            Image::new(ctx, &format!("directional {what} (stand-in)"), desc)
+        }
+    };
+    Ok(Some([
+        make("thin walls x y", info)?,
+        make("thin walls z", info)?,
+    ]))
 }
 
 /// Trilinear with mips; transparent black beyond the grid (--paper: the edge texels, as the
