@@ -208,13 +208,6 @@ fn the_ideal_column_is_the_path_tracer_with_the_same_bounces() {
     }
 }
 
-/// leak-junction's goal (0.01) is open (docs/hard-cases.md, "Open"): 0.0122 at 64x64, 0.01174
-/// at the tests' 48x48.
-#[test]
-fn leak_junction() {
-    check_open("leak-junction", 0.0118)
-}
-
 /// door-room's goal (0.05) is open (docs/hard-cases.md, "Open"): 0.564 at 64x64, 0.5593 at
 /// the tests' 48x48. The room lit through the door gets its light after two bounces and
 /// more, and a path tracer limited to the defaults' two bounces scores 0.606 itself.
@@ -242,7 +235,7 @@ macro_rules! cases {
 
         #[test]
         fn every_case_has_a_test() {
-            let tested = [$($name,)* "leak-junction", "door-room", "sky-room", "sky-room-outward"];
+            let tested = [$($name,)* "door-room", "sky-room", "sky-room-outward"];
             for c in CASES {
                 assert!(tested.contains(&c.name), "no test for the hard case {}", c.name);
             }
@@ -255,6 +248,7 @@ cases! {
     leak_wall_1cm => "leak-wall-1cm",
     leak_floor_1cm => "leak-floor-1cm",
     leak_wall_bounce => "leak-wall-bounce",
+    leak_junction => "leak-junction",
     density_300 => "density-300",
     density_3000 => "density-3000",
     two_sided_panel => "two-sided-panel",

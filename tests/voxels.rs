@@ -594,7 +594,8 @@ fn the_readback_holds_the_directional_volumes_and_small_emitters() {
         .map(|l| ((m >> l).max(1) as u64).pow(3))
         .sum();
     let dir = d.directional.expect("directional volumes read back");
-    assert_eq!(dir.len() as u64, 8 * per_volume);
+    // Six faces, light direction and position, and the thin walls' two (a bounce reads them).
+    assert_eq!(dir.len() as u64, 10 * per_volume);
     assert!(dir.iter().all(|t| t.is_finite()));
     assert!(
         dir.iter().any(|t| t.x > 0.0),
@@ -725,4 +726,85 @@ fn paper_average_is_the_compare_and_swap_model_bit_for_bit() {
         let got = [got.x as u8, got.y as u8, got.z as u8, d.count[i] as u8];
         assert_eq!(got, want, "{count} fragments in voxel {c:?}");
     }
+}
+
+/// The thin walls (`Volumes::thin_walls`, which the bounce's cones read): a wall of one quad in
+/// open space covers the base texels it passes through along x in full, and lies where the quad
+/// does; texels two or more away along x hold no wall, and no texel holds a wall facing y or z.
+/// Without a bounce the volumes are one-texel stand-ins, not read back.
+#[test]
+fn a_thin_wall_covers_its_texels_at_its_plane() {
+    let n = 32;
+    let mut s = empty_scene();
+    let m = lambert(&mut s, Vec3::splat(0.8));
+    anchor(&mut s, m);
+    let x = 0.53;
+    quad(
+        &mut s,
+        [
+            Vec3::new(x, 0.1, 0.1),
+            Vec3::new(x, 0.9, 0.1),
+            Vec3::new(x, 0.9, 0.9),
+            Vec3::new(x, 0.1, 0.9),
+        ],
+        m,
+    );
+    let d = render_voxels(&s, voxel_settings(n, false, Mode::Full));
+    let grid = VoxelGrid::fit(&s.bounds, n);
+    let t = grid.aniso_resolution() as usize;
+    let per_volume: usize = (0..grid.mip_levels())
+        .map(|l| ((t >> l).max(1)).pow(3))
+        .sum();
+    let dir = d.directional.expect("directional volumes read back");
+    assert_eq!(dir.len(), 10 * per_volume);
+    let (xy, z) = (&dir[8 * per_volume..], &dir[9 * per_volume..]);
+    let gx = (x - grid.origin.x) / grid.size;
+    let wall = (gx * n as f32) as usize / 2;
+    let (mut covered, mut clear) = (0, 0);
+    for k in 0..t {
+        for j in 0..t {
+            // Texels whose voxels all lie inside the quad (0.1 to 0.9) along y and z.
+            let inside = |c: usize| {
+                let lo = grid.origin.y + (2 * c) as f32 * grid.voxel_size();
+                lo > 0.1 && lo + 2.0 * grid.voxel_size() < 0.9
+            };
+            for i in 0..t {
+                let at = i + t * (j + t * k);
+                let (w, wz) = (xy[at], z[at]);
+                // The anchors' tiny triangles lie in the grid's corners.
+                let corner =
+                    [i, j, k].iter().all(|&c| c <= 1) || [i, j, k].iter().all(|&c| c + 2 >= t);
+                assert!(
+                    corner || (w.w == 0.0 && wz.y == 0.0),
+                    "texel {i} {j} {k}: walls facing y or z {} {}",
+                    w.w,
+                    wz.y
+                );
+                if corner {
+                    continue;
+                } else if i.abs_diff(wall) >= 2 {
+                    assert_eq!(
+                        w.y,
+                        0.0,
+                        "texel {i} {j} {k}, {} from the wall",
+                        i.abs_diff(wall)
+                    );
+                    clear += 1;
+                } else if i == wall && inside(j) && inside(k) {
+                    assert!(w.y > 0.999, "texel {i} {j} {k}: cover {}", w.y);
+                    let lies = w.x / w.y;
+                    assert!(
+                        (lies - gx).abs() < 0.05 / n as f32,
+                        "texel {i} {j} {k}: the wall at {lies}, the quad at {gx} (grid units)"
+                    );
+                    covered += 1;
+                }
+            }
+        }
+    }
+    assert!(covered >= 25 && clear > 1000, "{covered} {clear}");
+    let mut one = voxel_settings(n, false, Mode::Full);
+    one.gi.bounces = 1;
+    let d = render_voxels(&s, one);
+    assert_eq!(d.directional.expect("read back").len(), 8 * per_volume);
 }

@@ -221,13 +221,26 @@ impl Volumes {
             .is_some_and(|b| b.desc.extent.width == self.grid.resolution)
     }
 
-    /// The directional volumes and the volumes beside them (light direction and position),
-    /// which the mip passes write and the cones sample together.
+    /// Whether the thin walls' volumes are as large as the directional volumes (a bounce reads
+    /// them; else they are one-texel stand-ins, as are the directional volumes of a grid of 2).
+    pub fn holds_thin_walls(&self) -> bool {
+        self.thin_walls.as_ref().is_some_and(|[w, _]| {
+            self.faces.first().is_some_and(|f| {
+                (f.desc.extent.width, f.desc.mip_levels) == (w.desc.extent.width, w.desc.mip_levels)
+            })
+        })
+    }
+
+    /// The directional volumes and the volumes beside them (light direction and position, and
+    /// the thin walls where a bounce reads them), which the mip passes write and the cones
+    /// sample together.
     pub fn directional(&self) -> impl Iterator<Item = &Image> {
+        let walls = self.thin_walls.iter().filter(|_| self.holds_thin_walls());
         self.faces
             .iter()
             .chain(&self.light_dir)
             .chain(&self.light_pos)
+            .chain(walls.flatten())
     }
 
     pub fn new(
