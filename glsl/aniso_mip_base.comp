@@ -29,6 +29,11 @@ layout(set = 0, binding = 11, rgba16f) uniform readonly image3D back_radiance;
 // without a bounce.
 layout(set = 0, binding = 12, rgba16f) uniform writeonly image3D thin_walls_xy;
 layout(set = 0, binding = 13, rgba16f) uniform writeonly image3D thin_walls_z;
+// 1: make the thin walls (the first mip pass after the voxels are lit; they hold through the
+// bounces, changing with the voxels rather than the light).
+layout(push_constant) uniform Push {
+    uint walls;
+} push;
 #endif
 
 #ifndef PAPER
@@ -145,7 +150,7 @@ void main() {
     }
     imageStore(light_dir, c, going * 0.125);
     imageStore(light_pos, c, lies * 0.125);
-    if (imageSize(thin_walls_xy) == imageSize(face_nx)) thin_walls(c);
+    if (push.walls != 0u && imageSize(thin_walls_xy) == imageSize(face_nx)) thin_walls(c);
     for (int face = 0; face < 6; face++) {
         vec4 shown[8];
         for (int i = 0; i < 8; i++) {

@@ -29,6 +29,10 @@ layout(set = 0, binding = 16, rgba16f) uniform readonly image3D src_thin_walls_x
 layout(set = 0, binding = 17, rgba16f) uniform writeonly image3D dst_thin_walls_xy;
 layout(set = 0, binding = 18, rgba16f) uniform readonly image3D src_thin_walls_z;
 layout(set = 0, binding = 19, rgba16f) uniform writeonly image3D dst_thin_walls_z;
+// 1: make the thin walls (as aniso_mip_base.comp).
+layout(push_constant) uniform Push {
+    uint walls;
+} push;
 #endif
 
 #ifdef PAPER
@@ -108,7 +112,7 @@ void main() {
     // it holds one after another (their covers added, up to 1), averaged; along the axis the
     // block reaches a texel further on either side, as the base level's. Where they lie:
     // weighted by their cover.
-    if (imageSize(src_thin_walls_xy) != src) return;
+    if (push.walls == 0u || imageSize(src_thin_walls_xy) != src) return;
     vec3 cover = vec3(0.0), at = vec3(0.0);
     for (int x = lo.x - 1; x <= hi.x + 1; x++) {
         for (int y = lo.y - 1; y <= hi.y + 1; y++) {

@@ -14,6 +14,7 @@ pub struct Mip {
     base: Pass,
     /// One instance per level from 1: reads level - 1, writes level.
     levels: Option<Pass>,
+    paper: bool,
 }
 
 impl Mip {
@@ -42,7 +43,9 @@ impl Mip {
                 t.image_view("thin_walls_xy", a, a.level_view(0), Usage::Write)
                     .image_view("thin_walls_z", b, b.level_view(0), Usage::Write)
             });
-        let base = Pass::compute(ctx, &variant("aniso_mip_base.comp", paper), &[], base, 0)?;
+        // The default's passes push whether they make the thin walls (4 bytes).
+        let push = if paper { 0 } else { 4 };
+        let base = Pass::compute(ctx, &variant("aniso_mip_base.comp", paper), &[], base, push)?;
 
         let tables: Vec<Bindings> = (1..volumes.grid.mip_levels())
             .map(|level| {
@@ -82,22 +85,47 @@ impl Mip {
                 crate::vk::Program::Compute(&shader),
                 &[],
                 tables,
-                0,
+                push,
             )?)
         };
-        Ok(Mip { base, levels })
+        Ok(Mip {
+            base,
+            levels,
+            paper,
+        })
     }
 
-    /// The directional volumes' base level from the radiance volume.
-    pub fn record_base(&self, ctx: &Context, g: &mut Graph, volumes: &Volumes, name: &str) {
+    /// What the passes push: whether they make the thin walls (not --paper, which has none).
+    fn push(&self, walls: bool) -> Option<bool> {
+        (!self.paper).then_some(walls)
+    }
+
+    /// The directional volumes' base level from the radiance volume; with `walls`, also the
+    /// thin walls' (which hold through the bounces: they change with the voxels, not the light).
+    pub fn record_base(
+        &self,
+        ctx: &Context,
+        g: &mut Graph,
+        volumes: &Volumes,
+        name: &str,
+        walls: bool,
+    ) {
         let size = volumes.grid.aniso_resolution();
         self.base
             .declare(g.pass(name), 0)
-            .record(|cmd| dispatch(ctx, cmd, &self.base, 0, size));
+            .record(|cmd| dispatch(ctx, cmd, &self.base, 0, size, self.push(walls)));
     }
 
-    /// Each mip level of the directional volumes from the one before (a pass per level).
-    pub fn record_levels(&self, ctx: &Context, g: &mut Graph, volumes: &Volumes, name: &str) {
+    /// Each mip level of the directional volumes from the one before (a pass per level); with
+    /// `walls`, also the thin walls'.
+    pub fn record_levels(
+        &self,
+        ctx: &Context,
+        g: &mut Graph,
+        volumes: &Volumes,
+        name: &str,
+        walls: bool,
+    ) {
         let Some(p) = &self.levels else {
             return;
         };
@@ -106,16 +134,28 @@ impl Mip {
             let instance = level as usize - 1;
             let size = (m >> level).max(1);
             p.declare(g.pass(name), instance)
-                .record(|cmd| dispatch(ctx, cmd, p, instance, size));
+                .record(|cmd| dispatch(ctx, cmd, p, instance, size, self.push(walls)));
         }
     }
 }
 
-/// Binds instance `instance` of `p` and dispatches over a `size`^3 volume.
-fn dispatch(ctx: &Context, cmd: vk::CommandBuffer, p: &Pass, instance: usize, size: u32) {
+/// Binds instance `instance` of `p`, pushes `walls` (not --paper) and dispatches over a
+/// `size`^3 volume.
+fn dispatch(
+    ctx: &Context,
+    cmd: vk::CommandBuffer,
+    p: &Pass,
+    instance: usize,
+    size: u32,
+    walls: Option<bool>,
+) {
     let groups = size.div_ceil(4);
     unsafe {
         p.bind(&ctx.device, cmd, &[], instance);
+        if let Some(walls) = walls {
+            p.pipeline
+                .push(&ctx.device, cmd, &(walls as u32).to_le_bytes());
+        }
         ctx.device.cmd_dispatch(cmd, groups, groups, groups);
     }
 }

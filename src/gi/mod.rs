@@ -854,8 +854,8 @@ impl Gi {
                     .record_voxelize(ctx, g, v, input.geometry, dynamic, &name, draw)
             }
             Step::Inject { .. } => lighting().0.record(ctx, g, v, input.scene_set, &name),
-            Step::MipBase { .. } => lighting().1.record_base(ctx, g, v, &name),
-            Step::MipLevels { .. } => lighting().1.record_levels(ctx, g, v, &name),
+            Step::MipBase { bounce } => lighting().1.record_base(ctx, g, v, &name, bounce == 1),
+            Step::MipLevels { bounce } => lighting().1.record_levels(ctx, g, v, &name, bounce == 1),
             Step::EmptySpace => {
                 let e = self
                     .empty_space
