@@ -464,13 +464,24 @@ fn beside_directional(
     if settings.paper {
         return Ok(None);
     }
+    beside_directional_image(ctx, grid, face_bytes, what, info).map(Some)
+}
+
+/// One RGBA16F volume of the directional volumes' size and levels, listed in `info`.
+fn beside_directional_image(
+    ctx: &Arc<Context>,
+    grid: VoxelGrid,
+    face_bytes: u64,
+    what: &str,
+    info: &mut Vec<VolumeInfo>,
+) -> VkResult<Image> {
     let (m, levels) = (grid.aniso_resolution(), grid.mip_levels());
     let desc = ImageDesc::d3(vk::Format::R16G16B16A16_SFLOAT, m, volume_usage()).mips(levels);
     info.push(VolumeInfo {
         name: format!("directional {what}, {m}^3 with {levels} mips"),
         bytes: face_bytes,
     });
-    Image::new(ctx, &format!("directional {what}"), desc).map(Some)
+    Image::new(ctx, &format!("directional {what}"), desc)
 }
 
 /// The thin walls' two volumes beside the directional volumes (`Volumes::thin_walls`), or
@@ -487,8 +498,7 @@ fn thin_wall_volumes(
     }
     let make = |what: &str, info: &mut Vec<VolumeInfo>| {
         if settings.bounces >= 2 {
-            beside_directional(ctx, grid, settings, face_bytes, what, info)
-                .map(|i| i.expect("not --paper"))
+            beside_directional_image(ctx, grid, face_bytes, what, info)
         } else {
             let desc = ImageDesc::d3(vk::Format::R16G16B16A16_SFLOAT, 1, volume_usage());
             Image::new(ctx, &format!("directional {what} (stand-in)"), desc)
