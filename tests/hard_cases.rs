@@ -208,12 +208,13 @@ fn the_ideal_column_is_the_path_tracer_with_the_same_bounces() {
     }
 }
 
-/// door-room's goal (0.05) is open (docs/hard-cases.md, "Open"): 0.564 at 64x64, 0.5593 at
+/// door-room's goal (0.05) is open (docs/hard-cases.md, "Open"): 0.444 at 64x64, 0.4394 at
 /// the tests' 48x48. The room lit through the door gets its light after two bounces and
-/// more, and a path tracer limited to the defaults' two bounces scores 0.606 itself.
+/// more, and a path tracer limited to the defaults' two bounces scores 0.606 itself (0.140
+/// with eight).
 #[test]
 fn door_room() {
-    check_open("door-room", 0.56)
+    check_open("door-room", 0.44)
 }
 
 /// sky-room's and sky-room-outward's goal (0.02) is met at 64x64 (0.0163 and 0.0169) and at
