@@ -36,7 +36,8 @@ layout(set = CONE_SET, binding = 9) uniform sampler3D light_pos;
 // filled voxel (empty_space.comp).
 layout(set = CONE_SET, binding = 10, r32ui) uniform readonly uimage3D empty_space;
 #if CONE_THIN_WALLS
-// Where the thin walls lie per axis and how much of a texel they cover (Volumes::thin_walls).
+// Where the thin walls lie per axis and how much of a texel they cover (Volumes::thin_walls),
+// each read from the nearest mip level (Volumes::level_sampler).
 layout(set = CONE_SET, binding = 12) uniform sampler3D thin_walls_xy;
 layout(set = CONE_SET, binding = 13) uniform sampler3D thin_walls_z;
 #endif

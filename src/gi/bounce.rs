@@ -92,6 +92,7 @@ pub fn cone_volumes(table: Bindings, volumes: &Volumes, full_res: bool) -> Bindi
         t.sampled("light_pos", p, s)
     })
     .with(volumes.thin_walls.as_ref(), |t, [a, b]| {
+        let s = &volumes.level_sampler;
         t.sampled("thin_walls_xy", a, s)
             .sampled("thin_walls_z", b, s)
     })

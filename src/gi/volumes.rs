@@ -210,6 +210,10 @@ pub struct Volumes {
     pub empty_space: Option<Image>,
     /// Trilinear, transparent black outside the grid.
     pub sampler: Sampler,
+    /// The same but from the nearest mip level only: the thin walls, which the bounce's cones
+    /// read twice a sample (blending two levels cost the frame after a light moved a tenth
+    /// more on lavapipe, for the same leaks).
+    pub level_sampler: Sampler,
     pub info: Vec<VolumeInfo>,
 }
 
@@ -275,7 +279,8 @@ impl Volumes {
             beside_directional(ctx, grid, settings, face_bytes, "light position", &mut info)?;
         let thin_walls = thin_wall_volumes(ctx, grid, settings, face_bytes, &mut info)?;
         let empty_space = empty_space_volume(ctx, grid, settings, &mut info)?;
-        let sampler = volume_sampler(ctx, settings.paper)?;
+        let sampler = volume_sampler(ctx, settings.paper, vk::SamplerMipmapMode::LINEAR)?;
+        let level_sampler = volume_sampler(ctx, settings.paper, vk::SamplerMipmapMode::NEAREST)?;
         let [s, d] = data.tables();
         let words = [
             AddressTable::new(ctx, "static voxel word addresses", &s)?,
@@ -295,6 +300,7 @@ impl Volumes {
             thin_walls,
             empty_space,
             sampler,
+            level_sampler,
             info,
         })
     }
@@ -510,9 +516,13 @@ fn thin_wall_volumes(
     ]))
 }
 
-/// Trilinear with mips; transparent black beyond the grid (--paper: the edge texels, as the
-/// original's clamp to edge).
-fn volume_sampler(ctx: &Arc<Context>, paper: bool) -> VkResult<Sampler> {
+/// Linear within a level, between levels as `mipmap_mode` says; transparent black beyond the
+/// grid (--paper: the edge texels, as the original's clamp to edge).
+fn volume_sampler(
+    ctx: &Arc<Context>,
+    paper: bool,
+    mipmap_mode: vk::SamplerMipmapMode,
+) -> VkResult<Sampler> {
     let beyond = if paper {
         vk::SamplerAddressMode::CLAMP_TO_EDGE
     } else {
@@ -523,7 +533,7 @@ fn volume_sampler(ctx: &Arc<Context>, paper: bool) -> VkResult<Sampler> {
         &vk::SamplerCreateInfo::default()
             .mag_filter(vk::Filter::LINEAR)
             .min_filter(vk::Filter::LINEAR)
-            .mipmap_mode(vk::SamplerMipmapMode::LINEAR)
+            .mipmap_mode(mipmap_mode)
             .address_mode_u(beyond)
             .address_mode_v(beyond)
             .address_mode_w(beyond)
