@@ -34,6 +34,8 @@ layout(set = 0, binding = 0, std140) uniform Frame {
                       // empty-space cell
     vec4 env;         // the environment (environment.glsl): x strength, yz cosine and sine of
                       // its turn about +Y, w 1 when there is one
+    vec4 bounce_cone;       // the bounces' diffuse cones: x aperture (tan of half angle), y count
+    vec4 bounce_cones[16];  // as cones[16], for the bounces (inject_bounce.comp)
 } frame;
 
 const uint FLAG_DYNAMIC = 1u;        // dynamic accumulators are bound and filled

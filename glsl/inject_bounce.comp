@@ -2,8 +2,8 @@
 // variants: PAPER
 // Second bounce (the paper's inject_propagation): every voxel gathers the light the directional
 // volumes hold around it with diffuse cones and adds what it reflects to its radiance; the mip
-// passes then run again. Default: the pixel pass's cone set and albedo / pi; a two-sided voxel
-// gathers both sides. What a voxel reflects is kept aside for bounce_tail.comp, which adds it
+// passes then run again. Default: the bounces' own cone set (fewer and wider than the pixels':
+// frame.bounce_cones) and albedo / pi; a two-sided voxel gathers both sides. What a voxel reflects is kept aside for bounce_tail.comp, which adds it
 // (on the last bounce with the bounces not traced), and each voxel's albedo times the share of
 // its hemisphere the cones found closed is summed for it. PAPER: the original's 4 cones of
 // aperture 1, 40.9 degrees from the normal, weights pi/3 and 2pi/9, clamped to 1, added to the
@@ -84,11 +84,11 @@ vec4 gather(vec3 p, vec3 n) {
     // From a voxel centre, which can lie up to sqrt(3)/2 voxel behind its surface: one voxel
     // further out than the pixels' cones start.
     vec3 origin = p + n * (frame.trace.x + 1.0) * vs;
-    for (uint i = 0u; i < frame.grid_info.z; i++) {
-        vec3 d = normalize(frame_n * frame.cones[i].xyz);
-        Cone cone = trace_cone(origin, d, frame.cone.x, vs, max_dist);
-        e += frame.cones[i].w * cone.radiance;
-        closed += frame.cones[i].w * cone.opacity;
+    for (uint i = 0u; i < uint(frame.bounce_cone.y); i++) {
+        vec3 d = normalize(frame_n * frame.bounce_cones[i].xyz);
+        Cone cone = trace_cone(origin, d, frame.bounce_cone.x, vs, max_dist);
+        e += frame.bounce_cones[i].w * cone.radiance;
+        closed += frame.bounce_cones[i].w * cone.opacity;
     }
 #endif
     return vec4(e, closed / PI);  // the cone weights sum to pi

@@ -135,6 +135,12 @@ struct GiOpts {
     /// Aperture of the diffuse cones in degrees (default 36)
     #[arg(long, value_name = "DEG", value_parser = aperture)]
     aperture: Option<f32>,
+    /// Diffuse cones per voxel in the bounces (default 6)
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=16))]
+    bounce_cones: Option<u32>,
+    /// Aperture of the bounces' cones in degrees (default 60)
+    #[arg(long, value_name = "DEG", value_parser = aperture)]
+    bounce_aperture: Option<f32>,
     /// Cone step as a fraction of the cone diameter (default 0.5)
     #[arg(long, value_name = "F", value_parser = step)]
     step: Option<f32>,
@@ -612,9 +618,9 @@ struct BenchCmd {
     /// SPEC := PART ('|' PART)*, the union of the parts; PART := PRESET | AXIS (';' AXIS)*;
     /// AXIS := NAME=V1,V2,..: the cartesian product of the axes over the defaults. Presets:
     /// default (one axis at a time around the defaults), tiny (32^3: default and paper). Axes:
-    /// voxels, bounces, paper, cones, aperture, step, max-distance, start-offset, ao-falloff,
-    /// voxel-shadows, cone-shadows, paper-slips, lod-offset, tail, area-lights, trace-scale,
-    /// temporal, specular-min, empty-space, backs
+    /// voxels, bounces, paper, cones, aperture, bounce-cones, bounce-aperture, step,
+    /// max-distance, start-offset, ao-falloff, voxel-shadows, cone-shadows, paper-slips,
+    /// lod-offset, tail, area-lights, trace-scale, temporal, specular-min, empty-space, backs
     #[arg(long, default_value = "default")]
     sweep: String,
     /// Where the results go
@@ -732,6 +738,8 @@ impl GiOpts {
         gi.bounces = self.bounces.unwrap_or(gi.bounces);
         gi.cone_count = self.cones.unwrap_or(gi.cone_count);
         gi.cone_aperture_deg = self.aperture.unwrap_or(gi.cone_aperture_deg);
+        gi.bounce_cone_count = self.bounce_cones.unwrap_or(gi.bounce_cone_count);
+        gi.bounce_cone_aperture_deg = self.bounce_aperture.unwrap_or(gi.bounce_cone_aperture_deg);
         gi.step_factor = self.step.unwrap_or(gi.step_factor);
         gi.voxel_shadows = self.voxel_shadows;
         gi.cone_shadows = self.cone_shadows;

@@ -5,6 +5,7 @@ mod gpu;
 use glam::{Mat4, Vec3};
 use gpu::*;
 use std::path::Path;
+use std::sync::atomic::{AtomicUsize, Ordering};
 use voxgi::gi::GiSettings;
 use voxgi::render::{Mode, RenderSettings, Renderer};
 use voxgi::scene::{Material, Scene};
@@ -394,24 +395,67 @@ fn each_bounce_adds_less_light_than_the_one_before() {
 
 /// The furnace's image mean (green) at 32^3 and 24x24, with `bounces` and the tail or not.
 fn furnace_mean(albedo: f32, le: f32, bounces: u32, tail: bool) -> f32 {
+    let mut set = settings(Mode::Full, 32, 24);
+    set.gi.bounces = bounces;
+    set.gi.tail = tail;
+    furnace_mean_with(albedo, le, set)
+}
+
+/// The furnace's image mean (green) with `set`.
+fn furnace_mean_with(albedo: f32, le: f32, set: RenderSettings) -> f32 {
+    static RUNS: AtomicUsize = AtomicUsize::new(0);
     let (b, camera) = voxgi::hard::scenes::furnace(albedo, le);
     let path = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
-        "voxgi-tail-{}-{albedo}-{bounces}-{tail}.glb",
-        std::process::id()
+        "voxgi-furnace-{}-{}.glb",
+        std::process::id(),
+        RUNS.fetch_add(1, Ordering::Relaxed)
     ));
     std::fs::write(&path, b.to_glb()).unwrap();
     let mut s = voxgi::scene::load(&path).unwrap();
     std::fs::remove_file(&path).unwrap();
     s.camera = camera;
-    let mut set = settings(Mode::Full, 32, 24);
-    set.gi.bounces = bounces;
-    set.gi.tail = tail;
     let img = render(&s, set);
     assert!(
         !img.has_non_finite(),
         "albedo {albedo}, Le {le}: not finite"
     );
     img.pixels.iter().map(|p| p[1]).sum::<f32>() / img.pixels.len() as f32
+}
+
+#[test]
+fn the_bounce_gathers_with_its_own_cones() {
+    // The furnace of albedo 0.5 with one bounce and no tail, its bounce gathered by the
+    // defaults' cones, by the pixels' 16, and by one wide cone; the pixels' cones stay the
+    // defaults'.
+    let mean = |bounces: u32, count: u32, aperture: f32| {
+        let mut set = settings(Mode::Full, 32, 24);
+        set.gi.bounces = bounces;
+        set.gi.tail = false;
+        set.gi.bounce_cone_count = count;
+        set.gi.bounce_cone_aperture_deg = aperture;
+        furnace_mean_with(0.5, 1.0, set)
+    };
+    let unbounced = mean(1, 1, 120.0);
+    assert_eq!(
+        unbounced,
+        mean(1, 12, 36.0),
+        "no bounce, yet its cones changed the image"
+    );
+    let (defaults, sixteen, one) = (mean(2, 12, 36.0), mean(2, 16, 36.0), mean(2, 1, 120.0));
+    eprintln!("no bounce {unbounced}; with 12 cones {defaults}, 16 {sixteen}, one {one}");
+    let bounce = |m: f32| m - unbounced;
+    assert!(
+        (bounce(defaults) / bounce(sixteen) - 1.0).abs() < 0.01,
+        "the bounce's light with 12 cones {} and 16 {}",
+        bounce(defaults),
+        bounce(sixteen)
+    );
+    assert!(
+        (bounce(one) / bounce(sixteen) - 1.0).abs() > 0.02,
+        "one wide cone gathered what 16 do: {} and {}",
+        bounce(one),
+        bounce(sixteen)
+    );
 }
 
 #[test]

@@ -44,6 +44,11 @@ pub struct GiSettings {
     pub cone_count: u32,
     /// Full aperture of each diffuse cone, in degrees.
     pub cone_aperture_deg: f32,
+    /// Diffuse cones per voxel in the bounces (1 to 16; not `paper`, whose propagation has its
+    /// own four).
+    pub bounce_cone_count: u32,
+    /// Full aperture of each of the bounces' cones, in degrees.
+    pub bounce_cone_aperture_deg: f32,
     /// Step length as a fraction of the cone diameter.
     pub step_factor: f32,
     /// Longest cone, as a fraction of the grid's edge (cones also end a diameter past the grid).
@@ -109,6 +114,12 @@ impl Default for GiSettings {
             // cones are a coarse quadrature near small bright emitters (docs/hard-cases.md).
             cone_count: 16,
             cone_aperture_deg: 36.0,
+            // The bounces' cones: 12 of the pixels' 36 degrees. A voxel's bounce light reaches
+            // the image through the pixels' cones, which blur it: 16 cost the frame after a
+            // light moves a fifth more for the same error; fewer and wider ones cost closed
+            // rooms' light (docs/hard-cases.md).
+            bounce_cone_count: 12,
+            bounce_cone_aperture_deg: 36.0,
             step_factor: 0.5,
             // Cones end where the grid does (a diameter past its edge), not before: the paper's
             // 0.95 of the edge cut off cones across a closed room before its far walls made
@@ -164,6 +175,8 @@ impl GiSettings {
             bounces: 2,
             cone_count: 6,
             cone_aperture_deg: 60.0,
+            bounce_cone_count: 6,
+            bounce_cone_aperture_deg: 60.0,
             step_factor: 0.5,
             max_distance: 0.95,
             start_offset: 2.0,
@@ -270,6 +283,22 @@ pub const FIELDS: &[Field] = &[
         max: 179.0,
         get: |g| Value::Real(g.cone_aperture_deg),
         set: |g, v| g.cone_aperture_deg = v as f32,
+    },
+    Field {
+        axis: "bounce-cones",
+        column: "bounce_cone_count",
+        min: 1.0,
+        max: 16.0,
+        get: |g| Value::Count(g.bounce_cone_count),
+        set: |g, v| g.bounce_cone_count = v as u32,
+    },
+    Field {
+        axis: "bounce-aperture",
+        column: "bounce_cone_aperture_deg",
+        min: 0.5,
+        max: 179.0,
+        get: |g| Value::Real(g.bounce_cone_aperture_deg),
+        set: |g, v| g.bounce_cone_aperture_deg = v as f32,
     },
     Field {
         axis: "step",
@@ -620,6 +649,8 @@ pub struct Gi {
     pub bounce: Option<Bounce>,
     pub trace: Trace,
     pub cones: Vec<Vec4>,
+    /// The bounces' cones (GiSettings::bounce_cone_count).
+    pub bounce_cones: Vec<Vec4>,
     pub emissive: bool,
     pub dynamic: bool,
     /// Scale of the emission sums (fixed point per unit radiance).
@@ -730,6 +761,11 @@ impl Gi {
         let trace = Trace::new(ctx, scene_set, &volumes, &inputs.frame, paper, layout)?;
         Ok(Gi {
             cones: cone_set(settings.cone_count, settings.cone_aperture_deg, paper),
+            bounce_cones: cone_set(
+                settings.bounce_cone_count,
+                settings.bounce_cone_aperture_deg,
+                false,
+            ),
             settings: settings.clone(),
             volumes,
             voxelizer,
@@ -1125,6 +1161,8 @@ mod tests {
             paper: _,
             cone_count: _,
             cone_aperture_deg: _,
+            bounce_cone_count: _,
+            bounce_cone_aperture_deg: _,
             step_factor: _,
             max_distance: _,
             start_offset: _,
@@ -1141,7 +1179,7 @@ mod tests {
             empty_space: _,
             backs: _,
         } = GiSettings::default();
-        assert_eq!(FIELDS.len(), 20, "a setting without its line in FIELDS");
+        assert_eq!(FIELDS.len(), 22, "a setting without its line in FIELDS");
         for f in FIELDS {
             let d = GiSettings::default();
             let mut g = d.clone();

@@ -39,6 +39,10 @@ pub struct FrameUniforms {
     pub tuning: Vec4,
     /// the environment: strength, cosine and sine of its turn, 1 when there is one
     pub env: Vec4,
+    /// the bounces' diffuse cones: aperture (tan of half angle), count, unused x2
+    pub bounce_cone: Vec4,
+    /// the bounces' diffuse cones: direction around +Z, weight
+    pub bounce_cones: [Vec4; 16],
 }
 
 #[repr(C)]
@@ -356,7 +360,9 @@ mod tests {
                 trace,
                 cones,
                 tuning,
-                env
+                env,
+                bounce_cone,
+                bounce_cones
             }),
             std::mem::size_of::<FrameUniforms>(),
         );

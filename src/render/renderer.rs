@@ -543,6 +543,15 @@ impl Renderer {
             for (dst, c) in u.cones.iter_mut().zip(&gi.cones) {
                 *dst = *c;
             }
+            u.bounce_cone = Vec4::new(
+                (s.bounce_cone_aperture_deg.to_radians() * 0.5).tan(),
+                gi.bounce_cones.len() as f32,
+                0.0,
+                0.0,
+            );
+            for (dst, c) in u.bounce_cones.iter_mut().zip(&gi.bounce_cones) {
+                *dst = *c;
+            }
         }
         u
     }
