@@ -2,12 +2,12 @@
 // variants: PAPER
 // Second bounce (the paper's inject_propagation): every voxel gathers the light the directional
 // volumes hold around it with diffuse cones and adds what it reflects to its radiance; the mip
-// passes then run again. Default: the bounces' own cone set (fewer and wider than the pixels':
-// frame.bounce_cones) and albedo / pi; a two-sided voxel gathers both sides. What a voxel reflects is kept aside for bounce_tail.comp, which adds it
-// (on the last bounce with the bounces not traced), and each voxel's albedo times the share of
-// its hemisphere the cones found closed is summed for it. PAPER: the original's 4 cones of
-// aperture 1, 40.9 degrees from the normal, weights pi/3 and 2pi/9, clamped to 1, added to the
-// radiance here.
+// passes then run again. Default: the bounces' own cone set (frame.bounce_cones, fewer than the
+// pixels') and albedo / pi; a two-sided voxel gathers both sides. What a voxel reflects is kept
+// aside for bounce_tail.comp, which adds it (on the last bounce with the bounces not traced),
+// and each voxel's albedo times the share of its hemisphere the cones found closed is summed
+// for it. PAPER: the original's 4 cones of aperture 1, 40.9 degrees from the normal, weights
+// pi/3 and 2pi/9, clamped to 1, added to the radiance here.
 #include "common.glsl"
 #include "voxel_common.glsl"
 #define VOXEL_SET 1
