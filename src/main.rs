@@ -135,10 +135,10 @@ struct GiOpts {
     /// Aperture of the diffuse cones in degrees (default 36)
     #[arg(long, value_name = "DEG", value_parser = aperture)]
     aperture: Option<f32>,
-    /// Diffuse cones per voxel in the bounces (default 6)
+    /// Diffuse cones per voxel in the bounces (default 12; the paper 6)
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=16))]
     bounce_cones: Option<u32>,
-    /// Aperture of the bounces' cones in degrees (default 60)
+    /// Aperture of the bounces' cones in degrees (default 36; the paper 60)
     #[arg(long, value_name = "DEG", value_parser = aperture)]
     bounce_aperture: Option<f32>,
     /// Cone step as a fraction of the cone diameter (default 0.5)
@@ -155,7 +155,7 @@ struct GiOpts {
     #[arg(long, requires = "paper")]
     paper_slips: bool,
     /// The last bounce does not add the bounces after it (by default it adds them as a
-    /// geometric series: the voxels' mean albedo times their closed share, at most 0.6, is each
+    /// geometric series: the voxels' mean albedo times their closed share, at most 0.8, is each
     /// further bounce's share of the one before)
     #[arg(long)]
     no_tail: bool,
@@ -1597,6 +1597,54 @@ fn main() -> ExitCode {
         Err(e) => {
             eprintln!("voxgi: error: {e:#}");
             ExitCode::FAILURE
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    /// The number after "default " in `render`'s help for `--long`.
+    fn help_default(long: &str) -> f32 {
+        let cmd = Cli::command();
+        let render = cmd.find_subcommand("render").expect("render subcommand");
+        let arg = render
+            .get_arguments()
+            .find(|a| a.get_long() == Some(long))
+            .unwrap_or_else(|| panic!("no --{long}"));
+        let help = arg.get_help().expect("help text").to_string();
+        let rest = help
+            .split("default ")
+            .skip(1)
+            .find(|r| r.starts_with(|c: char| c.is_ascii_digit()))
+            .unwrap_or_else(|| panic!("--{long}: no \"default N\" in {help:?}"));
+        let number: String = rest
+            .chars()
+            .take_while(|c| c.is_ascii_digit() || *c == '.')
+            .collect();
+        number
+            .parse()
+            .unwrap_or_else(|_| panic!("--{long}: {number:?} in {help:?}"))
+    }
+
+    /// Options whose default lives in `GiSettings` name it in their help; the two must agree.
+    #[test]
+    fn help_states_the_settings_defaults() {
+        let gi = GiSettings::default();
+        let cases = [
+            ("cones", gi.cone_count as f32),
+            ("aperture", gi.cone_aperture_deg),
+            ("bounce-cones", gi.bounce_cone_count as f32),
+            ("bounce-aperture", gi.bounce_cone_aperture_deg),
+            ("step", gi.step_factor),
+            ("trace-scale", gi.trace_scale as f32),
+            ("temporal", gi.temporal as f32),
+            ("specular-min", gi.specular_min_voxels),
+        ];
+        for (long, default) in cases {
+            assert_eq!(help_default(long), default, "--{long}'s help");
         }
     }
 }
