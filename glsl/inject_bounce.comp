@@ -1,12 +1,15 @@
 #version 450
-// variants: PAPER
+// variants: PAPER SHARE
 // Second bounce (the paper's inject_propagation): every voxel gathers the light the directional
 // volumes hold around it with diffuse cones and adds what it reflects to its radiance; the mip
 // passes then run again. Default: the bounces' own cone set (frame.bounce_cones, fewer than the
 // pixels') and albedo / pi; a two-sided voxel gathers both sides. What a voxel reflects is kept
 // aside for bounce_tail.comp, which adds it (on the last bounce with the bounces not traced),
 // and each voxel's albedo times the share of its hemisphere the cones found closed is summed
-// for it. PAPER: the original's 4 cones of aperture 1, 40.9 degrees from the normal, weights
+// for it. One-sided voxels share their gather within 2x2x2 blocks (FLAG_BOUNCE_SHARE): the
+// SHARE dispatch, run first, has each block's first one-sided voxel gather for the block, and
+// the voxels in its plane that face its way take that light (bounce light is smooth, and the
+// pixels' cones blur it again). PAPER: the original's 4 cones of aperture 1, 40.9 degrees from the normal, weights
 // pi/3 and 2pi/9, clamped to 1, added to the radiance here.
 #include "common.glsl"
 #include "voxel_common.glsl"
@@ -28,14 +31,25 @@ layout(set = 1, binding = 5, rgba8) uniform image3D radiance;
 // then, for a two-sided voxel, which way it goes along voxel_facing (-1 to 1; 2: one-sided).
 // With FLAG_BACKS two entries a voxel: then what its back reflects (r g b, 0), zero but for
 // open backs (voxel_data.glsl).
+#ifndef SHARE
 layout(set = 1, binding = 11, std430) writeonly buffer Reflected { uvec2 reflected[]; };
+#endif
 // Over the listed voxels: albedo x closed share (r, g, b) and their count, each as 64-bit fixed
 // point (low word, high word; REFLECTANCE_ONE a voxel); then the same over the open backs that
 // gathered light (the backs' own series: a room of quads facing out holds its light on their
 // backs).
+#ifndef SHARE
 layout(set = 1, binding = 12, std430) buffer Reflectance { uint reflectance[16]; };
 shared vec4 partial[64];
 shared vec4 partial_back[64];
+#endif
+// Per 2x2x2 block of voxels: what its representative gathered (gather()'s light and closed
+// share), which SHARE writes and the gather reads.
+#ifdef SHARE
+layout(set = 1, binding = 13, rgba32f) writeonly uniform image3D block_gather;
+#else
+layout(set = 1, binding = 13, rgba32f) readonly uniform image3D block_gather;
+#endif
 #endif
 
 #ifdef PAPER
@@ -108,6 +122,111 @@ void main() {
     imageStore(radiance, c, vec4(direct.rgb + bounce * frame.tuning.y, direct.a));
 }
 #else
+// The voxel of c's 2x2x2 block that gathers for the block: its first one-sided voxel in index
+// order (x fastest), and that voxel. c itself when it is the first.
+ivec3 block_representative(ivec3 c, out Voxel rep) {
+    ivec3 b = (c / 2) * 2;
+    for (int k = 0; k < 8; k++) {
+        ivec3 q = b + ivec3(k & 1, (k >> 1) & 1, k >> 2);
+        if (!in_grid(q)) continue;
+        rep = load_voxel(q);
+        if (rep.filled && rep.agreement >= 0.5) return q;
+    }
+    return ivec3(-1);
+}
+
+// Whether one-sided voxel v at c may take the gather of its block's representative (r, rep):
+// it faces within 26 degrees of it, lies in its plane (a floor voxelized two voxels thick
+// keeps its layers apart: the lower one's cones start among the upper one's voxels), and the
+// voxels in front of both, and a voxel beyond them to each side, are empty: no wall rises
+// beside them, whose nearness changes what each sees (and a divider between them would
+// hand the dark side the lit side's light).
+bool shares_gather(ivec3 c, Voxel v, ivec3 r, Voxel rep) {
+    if (dot(v.normal, rep.normal) < 0.9 || abs(dot(vec3(c - r), rep.normal)) >= 0.5) return false;
+    vec3 a = abs(rep.normal);
+    int axis = a.x >= max(a.y, a.z) ? 0 : (a.y >= a.z ? 1 : 2);
+    if (c[axis] != r[axis]) return false;
+    ivec3 front = ivec3(0);
+    front[axis] = rep.normal[axis] > 0.0 ? 1 : -1;
+    ivec3 lo = min(c, r) - ivec3(1), hi = max(c, r) + ivec3(1);
+    lo[axis] = c[axis] + front[axis];
+    hi[axis] = lo[axis];
+    for (int z = lo.z; z <= hi.z; z++) {
+        for (int y = lo.y; y <= hi.y; y++) {
+            for (int x = lo.x; x <= hi.x; x++) {
+                ivec3 q = ivec3(x, y, z);
+                if (in_grid(q) && voxel_filled(q)) return false;
+            }
+        }
+    }
+    return true;
+}
+
+// The workgroup's gathers are queued and then run by its invocations in turn, not each by
+// its own voxel's invocation: a voxel needs none (it takes its block's), one or two, and
+// invocations run in lockstep groups (lanes of a SIMD unit, a warp), where one that gathers
+// holds up the rest.
+const uint NO_GATHER = 0xFFFFFFFFu;
+shared vec3 queued_p[128];  // two a voxel at most
+shared vec3 queued_n[128];
+shared vec4 gathered[128];
+shared uint queued;
+
+void start_queue() {
+    if (gl_LocalInvocationIndex == 0u) queued = 0u;
+    barrier();
+}
+
+// Queues a gather from p facing n; its slot in `gathered`.
+uint queue_gather(vec3 p, vec3 n) {
+    uint k = atomicAdd(queued, 1u);
+    queued_p[k] = p;
+    queued_n[k] = n;
+    return k;
+}
+
+// Runs the queued gathers, spread over the workgroup (every invocation calls it).
+void run_queue() {
+    barrier();
+    uint count = queued;
+    for (uint k = gl_LocalInvocationIndex; k < count; k += gl_WorkGroupSize.x) {
+        gathered[k] = gather(queued_p[k], queued_n[k]);
+    }
+    barrier();
+}
+
+#ifdef SHARE
+void main() {
+    start_queue();
+    uint i = list_entry();
+    uint slot = NO_GATHER;
+    ivec3 c = ivec3(0);
+    if (listed(i)) {
+        c = listed_voxel(i);
+        Voxel rep;
+        if (block_representative(c, rep) == c) {
+            // From the block's centre moved into the representative's plane: the middle of the
+            // voxels that share it (half a voxel or less from each in a flat block).
+            vec3 centre = frame.grid.xyz + vec3((c / 2) * 2 + 1) * voxel_size();
+            vec3 p = voxel_centre(c);
+            slot = queue_gather(centre - rep.normal * dot(centre - p, rep.normal), rep.normal);
+        }
+    }
+    run_queue();
+    if (slot != NO_GATHER) imageStore(block_gather, c / 2, gathered[slot]);
+}
+#else
+// Whether one-sided voxel v at c takes its block's gather (then in `light`).
+bool block_gather_for(ivec3 c, Voxel v, out vec4 light) {
+    light = vec4(0.0);
+    if ((frame.grid_info.w & FLAG_BOUNCE_SHARE) == 0u) return false;
+    Voxel rep;
+    ivec3 r = block_representative(c, rep);
+    if (r != c && !shares_gather(c, v, r, rep)) return false;
+    light = imageLoad(block_gather, c / 2);
+    return true;
+}
+
 // Adds a workgroup's sum, already in fixed point, to the 64-bit word pair at k.
 void add_fixed(uint k, float x) {
     uint add = uint(x);
@@ -116,36 +235,59 @@ void add_fixed(uint k, float x) {
 }
 
 void main() {
+    start_queue();
     uint i = list_entry();
     vec4 mine = vec4(0.0);  // albedo x closed share, and 1, for the sums
     vec4 mine_back = vec4(0.0);  // the same for an open back that gathered light
+    // What the voxel gathers: its front (or its block's) and its back, queued or taken.
+    Voxel v;
+    v.filled = false;
+    ivec3 c = ivec3(0);
+    uint front_slot = NO_GATHER, back_slot = NO_GATHER;
+    vec4 front_light = vec4(0.0);
+    bool two_sided = false, open = false;
     if (listed(i)) {
-        ivec3 c = listed_voxel(i);
-        Voxel v = load_voxel(c);
-        vec3 bounce = vec3(0.0), back_light = vec3(0.0);
-        float side = 2.0;
+        c = listed_voxel(i);
+        v = load_voxel(c);
         if (v.filled) {
             vec3 p = voxel_centre(c);
             vec3 n = voxel_facing(v);
+            two_sided = v.agreement < 0.5;
+            if (two_sided) {
+                front_slot = queue_gather(p, n);
+                back_slot = queue_gather(p, -n);
+            } else {
+                if (!block_gather_for(c, v, front_light)) front_slot = queue_gather(p, n);
+                // An open back gathers its own side, kept apart.
+                open = open_back(c, v);
+                if (open) back_slot = queue_gather(p, -n);
+            }
+        }
+    }
+    run_queue();
+    if (front_slot != NO_GATHER) front_light = gathered[front_slot];
+    vec4 back_gather = back_slot != NO_GATHER ? gathered[back_slot] : vec4(0.0);
+    if (listed(i)) {
+        vec3 bounce = vec3(0.0), back_light = vec3(0.0);
+        float side = 2.0;
+        if (v.filled) {
             float closed;
-            if (v.agreement < 0.5) {
+            if (two_sided) {
                 // Two-sided: each face reflects what falls on its side; the voxel holds their
                 // mean, and its light goes where the brighter side faces (as
                 // inject_radiance.comp's direct light does), not every way: a thin wall lit on
                 // one side stays dark on the other.
-                vec4 gf = gather(p, n), gb = gather(p, -n);
+                vec4 gf = front_light, gb = back_gather;
                 vec3 front = v.albedo / PI * gf.rgb, back = v.albedo / PI * gb.rgb;
                 bounce = 0.5 * (front + back);
                 float lf = luminance(front), lb = luminance(back);
                 side = (lf - lb) / max(lf + lb, 1e-30);
                 closed = 0.5 * (gf.a + gb.a);
             } else {
-                vec4 g = gather(p, n);
-                bounce = v.albedo / PI * g.rgb;
-                closed = g.a;
-                // An open back gathers its own side, kept apart.
-                if (open_back(c, v)) {
-                    vec4 gb = gather(p, -n);
+                bounce = v.albedo / PI * front_light.rgb;
+                closed = front_light.a;
+                if (open) {
+                    vec4 gb = back_gather;
                     back_light = v.albedo / PI * gb.rgb;
                     if (luminance(gb.rgb) > 0.0) {
                         mine_back = vec4(v.albedo * clamp(gb.a, 0.0, 1.0), 1.0);
@@ -185,4 +327,5 @@ void main() {
         for (uint k = 0u; k < 4u; k++) add_fixed(8u + 2u * k, partial_back[0][k]);
     }
 }
+#endif  // SHARE
 #endif

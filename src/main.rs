@@ -186,6 +186,10 @@ struct GiOpts {
     /// tracer's does)
     #[arg(long)]
     no_backs: bool,
+    /// Every voxel gathers its own bounce light (by default the one-sided voxels of a 2x2x2
+    /// block that lie in one plane and face one way share one gather)
+    #[arg(long)]
+    no_bounce_share: bool,
 }
 
 fn trace_scale(s: &str) -> Result<u32, String> {
@@ -751,6 +755,7 @@ impl GiOpts {
         gi.specular_min_voxels = self.specular_min.unwrap_or(gi.specular_min_voxels);
         gi.empty_space &= !self.no_empty_space;
         gi.backs &= !self.no_backs;
+        gi.bounce_share &= !self.no_bounce_share;
         gi
     }
 }

@@ -4,6 +4,7 @@
 
 use super::inject::{read_voxel_data, variant};
 use super::volumes::Volumes;
+use super::GiSettings;
 use crate::vk::{vk, Access, Bindings, Buffer, Context, Graph, Pass, SharedSet, Usage, VkResult};
 use gpu_allocator::MemoryLocation;
 use std::sync::Arc;
@@ -11,6 +12,9 @@ use std::sync::Arc;
 pub struct Bounce {
     list_pass: Pass,
     gather: Pass,
+    /// Each 2x2x2 block's first one-sided voxel gathers for the block before the gather
+    /// (`GiSettings::bounce_share`; inject_bounce.comp's SHARE).
+    share: Option<Pass>,
     /// The filled voxels (voxel_list.comp), after the bounce's dispatch arguments and count.
     list: Buffer,
     /// Entries the list holds.
@@ -106,11 +110,10 @@ impl Bounce {
         ctx: &Arc<Context>,
         scene: &SharedSet,
         volumes: &Volumes,
-        paper: bool,
-        tail: bool,
-        bounces: u32,
+        settings: &GiSettings,
         capacity: u64,
     ) -> VkResult<Bounce> {
+        let (paper, tail, bounces) = (settings.paper, settings.tail, settings.bounces);
         let count = Buffer::readback(ctx, "voxel list count", 4)?;
         let list = Buffer::new(
             ctx,
@@ -172,6 +175,9 @@ impl Bounce {
             } else {
                 t
             };
+            let t = t.with(volumes.bounce_blocks.as_ref(), |t, b| {
+                t.image("block_gather", b, Usage::Read)
+            });
             cone_volumes(t, volumes, false)
         };
         let instances = if paper { 1 } else { 2 };
@@ -182,6 +188,21 @@ impl Bounce {
             (0..instances).map(gather).collect(),
             0,
         )?;
+        let share = match &volumes.bounce_blocks {
+            Some(blocks) if settings.bounce_share => {
+                let t = read_voxel_data(Bindings::new(), volumes)
+                    .buffer("VoxelList", &list, Usage::Indirect)
+                    .image("block_gather", blocks, Usage::Write);
+                Some(Pass::compute(
+                    ctx,
+                    "inject_bounce.comp:SHARE",
+                    &[scene],
+                    cone_volumes(t, volumes, false),
+                    0,
+                )?)
+            }
+            _ => None,
+        };
         let tail = match buffers {
             Some((reflected, reflectance)) => {
                 let add = |k: usize| {
@@ -217,6 +238,7 @@ impl Bounce {
         Ok(Bounce {
             list_pass,
             gather,
+            share,
             list,
             capacity,
             count,
@@ -280,6 +302,11 @@ impl Bounce {
         v
     }
 
+    /// Whether one-sided voxels share their gather within blocks (FLAG_BOUNCE_SHARE).
+    pub fn shares(&self) -> bool {
+        self.share.is_some()
+    }
+
     /// Whether the gather leaves its light to an add pass and sums the reflectance (all but
     /// --paper, whose gather adds to the radiance itself).
     pub fn adds_separately(&self) -> bool {
@@ -317,6 +344,13 @@ impl Bounce {
         bounce: u32,
         name: &str,
     ) {
+        if let Some(p) = &self.share {
+            p.declare(g.pass(&format!("{name} blocks")), 0)
+                .record(|cmd| unsafe {
+                    p.bind(&ctx.device, cmd, &[(0, scene_set)], 0);
+                    ctx.device.cmd_dispatch_indirect(cmd, self.list.raw, 0);
+                });
+        }
         let p = &self.gather;
         let k = self.instance(bounce);
         p.declare(g.pass(name), k).record(|cmd| unsafe {

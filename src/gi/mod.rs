@@ -97,6 +97,10 @@ pub struct GiSettings {
     /// directly, gathering its own side in the bounces, and seen by cones from behind only
     /// (glsl/voxel_data.glsl, `open_back`). Not for `paper`, whose voxels shine every way.
     pub backs: bool,
+    /// One-sided voxels share their bounce gather within 2x2x2 blocks: the block's first
+    /// gathers, and the voxels in its plane facing within 26 degrees of it take its light
+    /// (glsl/inject_bounce.comp). Not for `paper`.
+    pub bounce_share: bool,
 }
 
 impl Default for GiSettings {
@@ -157,6 +161,8 @@ impl Default for GiSettings {
             // A room of single quads facing out, open on one side under a sky: relMSE 0.072
             // without (its quads' voxels reflected only outwards), docs/environment.md.
             backs: true,
+            // MEASURED below (docs/fast-frames.md).
+            bounce_share: true,
         }
     }
 }
@@ -187,6 +193,7 @@ impl GiSettings {
             specular_min_voxels: 1.0,
             empty_space: false,
             backs: false,
+            bounce_share: false,
             ..Default::default()
         }
     }
@@ -420,6 +427,14 @@ pub const FIELDS: &[Field] = &[
         get: |g| Value::Switch(g.backs),
         set: |g, v| g.backs = v != 0.0,
     },
+    Field {
+        axis: "bounce-share",
+        column: "bounce_share",
+        min: 0.0,
+        max: 1.0,
+        get: |g| Value::Switch(g.bounce_share),
+        set: |g, v| g.bounce_share = v != 0.0,
+    },
 ];
 
 /// Empties a list that drives an indirect dispatch (the bounce's filled voxels, the trace's
@@ -636,6 +651,7 @@ pub const FLAG_CONE_SHADOWS: u32 = 8;
 pub const FLAG_EMPTY_SPACE: u32 = 16;
 pub const FLAG_PAPER_SLIPS: u32 = 32;
 pub const FLAG_BACKS: u32 = 64;
+pub const FLAG_BOUNCE_SHARE: u32 = 128;
 
 /// The voxel passes a renderer runs: only those its mode and scene need.
 pub struct Gi {
@@ -742,15 +758,7 @@ impl Gi {
                 .unwrap_or_else(|| bounce::list_capacity(n));
             let backs = volumes.holds_backs();
             let capacity = capacity.clamp(1, bounce::list_capacity_limit(ctx, n, paper, backs));
-            Some(Bounce::new(
-                ctx,
-                scene_set,
-                &volumes,
-                paper,
-                settings.tail,
-                settings.bounces,
-                capacity,
-            )?)
+            Some(Bounce::new(ctx, scene_set, &volumes, settings, capacity)?)
         } else {
             None
         };
@@ -804,6 +812,10 @@ impl Gi {
                 FLAG_PAPER_SLIPS,
             )
             | flag(self.volumes.holds_backs(), FLAG_BACKS)
+            | flag(
+                self.bounce.as_ref().is_some_and(|b| b.shares()),
+                FLAG_BOUNCE_SHARE,
+            )
     }
 
     /// The voxel passes a frame records when `dirty` says what changed, in order: the volumes
@@ -944,15 +956,11 @@ impl Gi {
             forget(raw);
         }
         self.bounce = None;
-        let paper = self.settings.paper;
-        let (tail, bounces) = (self.settings.tail, self.settings.bounces);
         self.bounce = Some(Bounce::new(
             ctx,
             scene_set,
             &self.volumes,
-            paper,
-            tail,
-            bounces,
+            &self.settings,
             to,
         )?);
         self.dirty = Dirty::ALL;
@@ -1178,8 +1186,9 @@ mod tests {
             specular_min_voxels: _,
             empty_space: _,
             backs: _,
+            bounce_share: _,
         } = GiSettings::default();
-        assert_eq!(FIELDS.len(), 22, "a setting without its line in FIELDS");
+        assert_eq!(FIELDS.len(), 23, "a setting without its line in FIELDS");
         for f in FIELDS {
             let d = GiSettings::default();
             let mut g = d.clone();

@@ -208,6 +208,10 @@ pub struct Volumes {
     /// nearest cell that holds a filled voxel (R32UI; src/gi/empty_space.rs). None for --paper;
     /// a one-texel stand-in, never read, without `GiSettings::empty_space`.
     pub empty_space: Option<Image>,
+    /// Per 2x2x2 block of voxels, the bounce gather its one-sided voxels share (RGBA32F: light
+    /// and closed share; glsl/inject_bounce.comp). None for --paper; a one-texel stand-in,
+    /// never read, without a bounce or without `GiSettings::bounce_share`.
+    pub bounce_blocks: Option<Image>,
     /// Trilinear, transparent black outside the grid.
     pub sampler: Sampler,
     /// The same but from the nearest mip level only: the thin walls, which the bounce's cones
@@ -279,6 +283,9 @@ impl Volumes {
             beside_directional(ctx, grid, settings, face_bytes, "light position", &mut info)?;
         let thin_walls = thin_wall_volumes(ctx, grid, settings, face_bytes, &mut info)?;
         let empty_space = empty_space_volume(ctx, grid, settings, &mut info)?;
+        let shared = settings.bounces >= 2 && settings.bounce_share;
+        let bounce_blocks =
+            Optional::bounce_blocks().make(ctx, n.div_ceil(2), settings, shared, &mut info)?;
         let sampler = volume_sampler(ctx, settings.paper, vk::SamplerMipmapMode::LINEAR)?;
         let level_sampler = volume_sampler(ctx, settings.paper, vk::SamplerMipmapMode::NEAREST)?;
         let [s, d] = data.tables();
@@ -299,6 +306,7 @@ impl Volumes {
             light_pos,
             thin_walls,
             empty_space,
+            bounce_blocks,
             sampler,
             level_sampler,
             info,
@@ -407,6 +415,18 @@ impl Optional {
         }
     }
 
+    /// The bounce's gathers shared per 2x2x2 block (`GiSettings::bounce_share`).
+    fn bounce_blocks() -> Optional {
+        Optional {
+            name: "bounce gathers of voxel blocks",
+            label: "bounce gathers of 2x2x2 voxel blocks (RGBA32F)",
+            format: vk::Format::R32G32B32A32_SFLOAT,
+            texel_bytes: 16,
+            usage: vk::ImageUsageFlags::STORAGE,
+        }
+    }
+
+    /// An image `n` texels a side when used.
     fn make(
         &self,
         ctx: &Arc<Context>,
