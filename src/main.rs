@@ -624,7 +624,8 @@ struct BenchCmd {
     /// default (one axis at a time around the defaults), tiny (32^3: default and paper). Axes:
     /// voxels, bounces, paper, cones, aperture, bounce-cones, bounce-aperture, step,
     /// max-distance, start-offset, ao-falloff, voxel-shadows, cone-shadows, paper-slips,
-    /// lod-offset, tail, area-lights, trace-scale, temporal, specular-min, empty-space, backs
+    /// lod-offset, tail, area-lights, trace-scale, temporal, specular-min, empty-space, backs,
+    /// bounce-share
     #[arg(long, default_value = "default")]
     sweep: String,
     /// Where the results go
