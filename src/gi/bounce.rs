@@ -335,6 +335,25 @@ impl Bounce {
         }
     }
 
+    /// Each 2x2x2 block's first one-sided voxel gathers for the block (with
+    /// `GiSettings::bounce_share`; before each bounce's gather).
+    pub fn record_share(
+        &self,
+        ctx: &Context,
+        g: &mut Graph,
+        scene_set: vk::DescriptorSet,
+        name: &str,
+    ) {
+        let p = self
+            .share
+            .as_ref()
+            .expect("a shared gather without sharing");
+        p.declare(g.pass(name), 0).record(|cmd| unsafe {
+            p.bind(&ctx.device, cmd, &[(0, scene_set)], 0);
+            ctx.device.cmd_dispatch_indirect(cmd, self.list.raw, 0);
+        });
+    }
+
     /// Each listed voxel gathers light from the directional volumes (bounce `bounce`, 2 on).
     pub fn record_gather(
         &self,
@@ -344,13 +363,6 @@ impl Bounce {
         bounce: u32,
         name: &str,
     ) {
-        if let Some(p) = &self.share {
-            p.declare(g.pass(&format!("{name} blocks")), 0)
-                .record(|cmd| unsafe {
-                    p.bind(&ctx.device, cmd, &[(0, scene_set)], 0);
-                    ctx.device.cmd_dispatch_indirect(cmd, self.list.raw, 0);
-                });
-        }
         let p = &self.gather;
         let k = self.instance(bounce);
         p.declare(g.pass(name), k).record(|cmd| unsafe {

@@ -870,6 +870,9 @@ impl Gi {
             if b.adds_separately() {
                 steps.push(Step::SumsClear { bounce });
             }
+            if b.shares() {
+                steps.push(Step::ShareGather { bounce });
+            }
             steps.push(Step::Gather { bounce });
             if b.adds_separately() {
                 steps.push(Step::Add {
@@ -916,6 +919,7 @@ impl Gi {
             Step::VoxelListClear => bounce().record_list_clear(ctx, g, &name),
             Step::VoxelList => bounce().record_list(ctx, g, v, input.scene_set, &name),
             Step::SumsClear { .. } => bounce().record_sums_clear(ctx, g, &name),
+            Step::ShareGather { .. } => bounce().record_share(ctx, g, input.scene_set, &name),
             Step::Gather { bounce: b } => bounce().record_gather(ctx, g, input.scene_set, b, &name),
             Step::Add { bounce: b, last } => {
                 bounce().record_add(ctx, g, input.scene_set, b, last, &name)
@@ -1032,6 +1036,10 @@ pub enum Step {
     SumsClear {
         bounce: u32,
     },
+    /// With `GiSettings::bounce_share`: each 2x2x2 block's gather, before the voxels'.
+    ShareGather {
+        bounce: u32,
+    },
     Gather {
         bounce: u32,
     },
@@ -1065,6 +1073,7 @@ impl Step {
             Step::VoxelListClear => "voxel list clear".into(),
             Step::VoxelList => "voxel list".into(),
             Step::SumsClear { bounce } => format!("{} sums clear", bounce_name(bounce)),
+            Step::ShareGather { bounce } => format!("{} blocks", bounce_name(bounce)),
             Step::Gather { bounce } => bounce_name(bounce),
             Step::Add { bounce, .. } => format!("{} add", bounce_name(bounce)),
         }
