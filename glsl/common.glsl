@@ -45,7 +45,7 @@ const uint FLAG_CONE_SHADOWS = 8u;   // direct light shadowed by cones through t
 const uint FLAG_EMPTY_SPACE = 16u;   // the empty-space volume is filled: cones may skip by it
 const uint FLAG_PAPER_SLIPS = 32u;   // PAPER: the original's C++ slips reproduced (--paper-slips)
 const uint FLAG_BACKS = 64u;         // the back radiance volume is filled (GiSettings::backs)
-const uint FLAG_BOUNCE_SHARE = 128u; // one-sided voxels share their bounce gather in 2x2x2 blocks
+const uint FLAG_BOUNCE_SHARE = 128u; // one-sided voxels share their bounce gather in blocks
 
 struct Material {
     vec4 base_color;

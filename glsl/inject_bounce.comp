@@ -6,10 +6,11 @@
 // pixels') and albedo / pi; a two-sided voxel gathers both sides. What a voxel reflects is kept
 // aside for bounce_tail.comp, which adds it (on the last bounce with the bounces not traced),
 // and each voxel's albedo times the share of its hemisphere the cones found closed is summed
-// for it. One-sided voxels share their gather within 2x2x2 blocks (FLAG_BOUNCE_SHARE): the
-// SHARE dispatch, run first, has each block's first one-sided voxel gather for the block, and
-// the voxels in its plane that face its way take that light (bounce light is smooth, and the
-// pixels' cones blur it again). PAPER: the original's 4 cones of aperture 1, 40.9 degrees from the normal, weights
+// for it. One-sided voxels share their gather within blocks of BLOCK^3 voxels
+// (FLAG_BOUNCE_SHARE): the SHARE dispatch, run first, one invocation a block, gathers from the
+// middle of the block's first one-sided voxel's plane where no surface rises in front of it,
+// and the voxels in that plane that face its way take that light (bounce light is smooth, and
+// the pixels' cones blur it again). PAPER: the original's 4 cones of aperture 1, 40.9 degrees from the normal, weights
 // pi/3 and 2pi/9, clamped to 1, added to the radiance here.
 #include "common.glsl"
 #include "voxel_common.glsl"
@@ -43,12 +44,17 @@ layout(set = 1, binding = 12, std430) buffer Reflectance { uint reflectance[16];
 shared vec4 partial[64];
 shared vec4 partial_back[64];
 #endif
-// Per 2x2x2 block of voxels: what its representative gathered (gather()'s light and closed
-// share), which SHARE writes and the gather reads.
+// Voxels a side of the blocks that share a gather (volumes.rs: BOUNCE_BLOCK).
+const int BLOCK = 4;
+// Per block: the gather made for it (gather()'s light and closed share), and which voxel's
+// plane it was made in (voxel_index + 1; 0: none, its voxels gather their own), which SHARE
+// writes and the gather reads.
 #ifdef SHARE
 layout(set = 1, binding = 13, rgba32f) writeonly uniform image3D block_gather;
+layout(set = 1, binding = 14, r32ui) writeonly uniform uimage3D block_first;
 #else
 layout(set = 1, binding = 13, rgba32f) readonly uniform image3D block_gather;
+layout(set = 1, binding = 14, r32ui) readonly uniform uimage3D block_first;
 #endif
 #endif
 
@@ -122,44 +128,19 @@ void main() {
     imageStore(radiance, c, vec4(direct.rgb + bounce * frame.tuning.y, direct.a));
 }
 #else
-// The voxel of c's 2x2x2 block that gathers for the block: its first one-sided voxel in index
-// order (x fastest), and that voxel. c itself when it is the first.
-ivec3 block_representative(ivec3 c, out Voxel rep) {
-    ivec3 b = (c / 2) * 2;
-    for (int k = 0; k < 8; k++) {
-        ivec3 q = b + ivec3(k & 1, (k >> 1) & 1, k >> 2);
-        if (!in_grid(q)) continue;
-        rep = load_voxel(q);
-        if (rep.filled && rep.agreement >= 0.5) return q;
-    }
-    return ivec3(-1);
+// The axis a normal is nearest.
+int main_axis(vec3 n) {
+    vec3 a = abs(n);
+    return a.x >= max(a.y, a.z) ? 0 : (a.y >= a.z ? 1 : 2);
 }
 
-// Whether one-sided voxel v at c may take the gather of its block's representative (r, rep):
-// it faces within 26 degrees of it, lies in its plane (a floor voxelized two voxels thick
-// keeps its layers apart: the lower one's cones start among the upper one's voxels), and the
-// voxels in front of both, and a voxel beyond them to each side, are empty: no wall rises
-// beside them, whose nearness changes what each sees (and a divider between them would
-// hand the dark side the lit side's light).
+// Whether one-sided voxel v at c may take the gather made in the plane of its block's first
+// one-sided voxel (r, rep): it faces within 26 degrees of it and lies in its plane (a floor
+// voxelized two voxels thick keeps its layers apart: the lower one's cones start among the
+// upper one's voxels). SHARE made no gather where a surface rises in front of the plane.
 bool shares_gather(ivec3 c, Voxel v, ivec3 r, Voxel rep) {
-    if (dot(v.normal, rep.normal) < 0.9 || abs(dot(vec3(c - r), rep.normal)) >= 0.5) return false;
-    vec3 a = abs(rep.normal);
-    int axis = a.x >= max(a.y, a.z) ? 0 : (a.y >= a.z ? 1 : 2);
-    if (c[axis] != r[axis]) return false;
-    ivec3 front = ivec3(0);
-    front[axis] = rep.normal[axis] > 0.0 ? 1 : -1;
-    ivec3 lo = min(c, r) - ivec3(1), hi = max(c, r) + ivec3(1);
-    lo[axis] = c[axis] + front[axis];
-    hi[axis] = lo[axis];
-    for (int z = lo.z; z <= hi.z; z++) {
-        for (int y = lo.y; y <= hi.y; y++) {
-            for (int x = lo.x; x <= hi.x; x++) {
-                ivec3 q = ivec3(x, y, z);
-                if (in_grid(q) && voxel_filled(q)) return false;
-            }
-        }
-    }
-    return true;
+    return dot(v.normal, rep.normal) >= 0.9 && abs(dot(vec3(c - r), rep.normal)) < 0.5
+        && c[main_axis(rep.normal)] == r[main_axis(rep.normal)];
 }
 
 // The workgroup's gathers are queued and then run by its invocations in turn, not each by
@@ -196,34 +177,68 @@ void run_queue() {
 }
 
 #ifdef SHARE
-void main() {
-    start_queue();
-    uint i = list_entry();
-    uint slot = NO_GATHER;
-    ivec3 c = ivec3(0);
-    if (listed(i)) {
-        c = listed_voxel(i);
-        Voxel rep;
-        if (block_representative(c, rep) == c) {
-            // From the block's centre moved into the representative's plane: the middle of the
-            // voxels that share it (half a voxel or less from each in a flat block).
-            vec3 centre = frame.grid.xyz + vec3((c / 2) * 2 + 1) * voxel_size();
-            vec3 p = voxel_centre(c);
-            slot = queue_gather(centre - rep.normal * dot(centre - p, rep.normal), rep.normal);
+// Whether the voxels in front of block b's plane through r (normal n) are empty, a voxel
+// beyond the block to each side too: no wall rises beside its voxels, whose nearness would
+// change what each sees (and a divider through the block would hand the dark side the lit
+// side's light).
+bool clear_in_front(ivec3 b, ivec3 r, vec3 n) {
+    int axis = main_axis(n);
+    ivec3 lo = b * BLOCK - ivec3(1), hi = b * BLOCK + ivec3(BLOCK);
+    lo[axis] = r[axis] + (n[axis] > 0.0 ? 1 : -1);
+    hi[axis] = lo[axis];
+    for (int z = lo.z; z <= hi.z; z++) {
+        for (int y = lo.y; y <= hi.y; y++) {
+            for (int x = lo.x; x <= hi.x; x++) {
+                ivec3 q = ivec3(x, y, z);
+                if (in_grid(q) && voxel_filled(q)) return false;
+            }
         }
     }
+    return true;
+}
+
+// One invocation a block (x fastest), in rows of groups of 64.
+void main() {
+    start_queue();
+    int m = (grid_n() + BLOCK - 1) / BLOCK;
+    uint k = gl_GlobalInvocationID.x + gl_WorkGroupID.y * gl_NumWorkGroups.x * 64u;
+    ivec3 b = ivec3(int(k) % m, (int(k) / m) % m, int(k) / (m * m));
+    bool inside = k < uint(m * m * m);
+    uint first = 0u;
+    uint slot = NO_GATHER;
+    if (inside) {
+        for (int j = 0; j < BLOCK * BLOCK * BLOCK; j++) {
+            ivec3 q = b * BLOCK + ivec3(j % BLOCK, (j / BLOCK) % BLOCK, j / (BLOCK * BLOCK));
+            if (!in_grid(q) || !voxel_filled(q)) continue;
+            Voxel v = load_voxel(q);
+            if (v.agreement < 0.5) continue;
+            if (clear_in_front(b, q, v.normal)) {
+                first = voxel_index(q) + 1u;
+                // From the block's middle moved into the plane: within half a block of
+                // each voxel that takes it.
+                vec3 middle = frame.grid.xyz + (vec3(b) + 0.5) * float(BLOCK) * voxel_size();
+                vec3 p = middle - v.normal * dot(middle - voxel_centre(q), v.normal);
+                slot = queue_gather(p, v.normal);
+            }
+            break;
+        }
+        imageStore(block_first, b, uvec4(first));
+    }
     run_queue();
-    if (slot != NO_GATHER) imageStore(block_gather, c / 2, gathered[slot]);
+    if (slot != NO_GATHER) imageStore(block_gather, b, gathered[slot]);
 }
 #else
 // Whether one-sided voxel v at c takes its block's gather (then in `light`).
 bool block_gather_for(ivec3 c, Voxel v, out vec4 light) {
     light = vec4(0.0);
     if ((frame.grid_info.w & FLAG_BOUNCE_SHARE) == 0u) return false;
-    Voxel rep;
-    ivec3 r = block_representative(c, rep);
-    if (r != c && !shares_gather(c, v, r, rep)) return false;
-    light = imageLoad(block_gather, c / 2);
+    ivec3 b = c / BLOCK;
+    uint first = imageLoad(block_first, b).x;
+    if (first == 0u) return false;
+    uint n = uint(grid_n()), f = first - 1u;
+    ivec3 r = ivec3(int(f % n), int((f / n) % n), int(f / (n * n)));
+    if (r != c && !shares_gather(c, v, r, load_voxel(r))) return false;
+    light = imageLoad(block_gather, b);
     return true;
 }
 

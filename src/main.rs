@@ -186,8 +186,8 @@ struct GiOpts {
     /// tracer's does)
     #[arg(long)]
     no_backs: bool,
-    /// Every voxel gathers its own bounce light (by default the one-sided voxels of a 2x2x2
-    /// block that lie in one plane and face one way share one gather)
+    /// Every voxel gathers its own bounce light (by default the one-sided voxels of a 4x4x4
+    /// block that lie in one plane with nothing in front and face one way share one gather)
     #[arg(long)]
     no_bounce_share: bool,
 }

@@ -3,7 +3,7 @@
 //! adds the bounces not traced, as a geometric series (glsl/bounce_tail.comp).
 
 use super::inject::{read_voxel_data, variant};
-use super::volumes::Volumes;
+use super::volumes::{Volumes, BOUNCE_BLOCK};
 use super::GiSettings;
 use crate::vk::{vk, Access, Bindings, Buffer, Context, Graph, Pass, SharedSet, Usage, VkResult};
 use gpu_allocator::MemoryLocation;
@@ -12,8 +12,8 @@ use std::sync::Arc;
 pub struct Bounce {
     list_pass: Pass,
     gather: Pass,
-    /// Each 2x2x2 block's first one-sided voxel gathers for the block before the gather
-    /// (`GiSettings::bounce_share`; inject_bounce.comp's SHARE).
+    /// Each block of voxels gathers once for its one-sided voxels in a plane, before the
+    /// gather (`GiSettings::bounce_share`; inject_bounce.comp's SHARE).
     share: Option<Pass>,
     /// The filled voxels (voxel_list.comp), after the bounce's dispatch arguments and count.
     list: Buffer,
@@ -175,8 +175,9 @@ impl Bounce {
             } else {
                 t
             };
-            let t = t.with(volumes.bounce_blocks.as_ref(), |t, b| {
-                t.image("block_gather", b, Usage::Read)
+            let t = t.with(volumes.bounce_blocks.as_ref(), |t, [g, f]| {
+                t.image("block_gather", g, Usage::Read)
+                    .image("block_first", f, Usage::Read)
             });
             cone_volumes(t, volumes, false)
         };
@@ -189,10 +190,10 @@ impl Bounce {
             0,
         )?;
         let share = match &volumes.bounce_blocks {
-            Some(blocks) if settings.bounce_share => {
+            Some([gathers, firsts]) if settings.bounce_share => {
                 let t = read_voxel_data(Bindings::new(), volumes)
-                    .buffer("VoxelList", &list, Usage::Indirect)
-                    .image("block_gather", blocks, Usage::Write);
+                    .image("block_gather", gathers, Usage::Write)
+                    .image("block_first", firsts, Usage::Write);
                 Some(Pass::compute(
                     ctx,
                     "inject_bounce.comp:SHARE",
@@ -335,22 +336,29 @@ impl Bounce {
         }
     }
 
-    /// Each 2x2x2 block's first one-sided voxel gathers for the block (with
-    /// `GiSettings::bounce_share`; before each bounce's gather).
+    /// Each block of voxels gathers once for its one-sided voxels in a plane (with
+    /// `GiSettings::bounce_share`; before each bounce's gather); `blocks`: the grid's voxels a
+    /// side.
     pub fn record_share(
         &self,
         ctx: &Context,
         g: &mut Graph,
         scene_set: vk::DescriptorSet,
+        blocks: u32,
         name: &str,
     ) {
         let p = self
             .share
             .as_ref()
             .expect("a shared gather without sharing");
+        // One invocation a block, in rows of at most 65535 groups of 64.
+        let m = blocks.div_ceil(BOUNCE_BLOCK) as u64;
+        let groups = (m * m * m).div_ceil(64);
+        let x = groups.min(65535);
+        let y = groups.div_ceil(x);
         p.declare(g.pass(name), 0).record(|cmd| unsafe {
             p.bind(&ctx.device, cmd, &[(0, scene_set)], 0);
-            ctx.device.cmd_dispatch_indirect(cmd, self.list.raw, 0);
+            ctx.device.cmd_dispatch(cmd, x as u32, y as u32, 1);
         });
     }
 

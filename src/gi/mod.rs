@@ -12,7 +12,7 @@ mod volumes;
 mod voxelize;
 
 pub use readback::{NonFinite, VoxelDump};
-pub use volumes::{VolumeInfo, Volumes};
+pub use volumes::{VolumeInfo, Volumes, BOUNCE_BLOCK};
 
 use crate::scene::Aabb;
 use crate::vk::{vk, Access, Buffer, Context, Graph, Pipeline, SharedSet, VertexLayout, VkResult};
@@ -97,9 +97,10 @@ pub struct GiSettings {
     /// directly, gathering its own side in the bounces, and seen by cones from behind only
     /// (glsl/voxel_data.glsl, `open_back`). Not for `paper`, whose voxels shine every way.
     pub backs: bool,
-    /// One-sided voxels share their bounce gather within 2x2x2 blocks: the block's first
-    /// gathers, and the voxels in its plane facing within 26 degrees of it take its light
-    /// (glsl/inject_bounce.comp). Not for `paper`.
+    /// One-sided voxels share their bounce gather within blocks of [`BOUNCE_BLOCK`]^3: where
+    /// nothing rises in front of the plane of a block's first one-sided voxel, one gather from
+    /// the middle of that plane, which the block's voxels in it facing within 26 degrees of it
+    /// take (glsl/inject_bounce.comp). Not for `paper`.
     pub bounce_share: bool,
 }
 
@@ -161,8 +162,8 @@ impl Default for GiSettings {
             // A room of single quads facing out, open on one side under a sky: relMSE 0.072
             // without (its quads' voxels reflected only outwards), docs/environment.md.
             backs: true,
-            // The frame after a light moves 30% faster on CornellBox-Original at the same
-            // relMSE; every hard case within 0.0005, door-room and leak-junction lower
+            // The frame after a light moves a third faster on CornellBox-Original (952 ->
+            // 609 ms) at the same relMSE; every hard case within +0.0003, door-room lower
             // (docs/fast-frames.md, "The frame after a light moves").
             bounce_share: true,
         }
@@ -919,7 +920,10 @@ impl Gi {
             Step::VoxelListClear => bounce().record_list_clear(ctx, g, &name),
             Step::VoxelList => bounce().record_list(ctx, g, v, input.scene_set, &name),
             Step::SumsClear { .. } => bounce().record_sums_clear(ctx, g, &name),
-            Step::ShareGather { .. } => bounce().record_share(ctx, g, input.scene_set, &name),
+            Step::ShareGather { .. } => {
+                let n = v.grid.resolution;
+                bounce().record_share(ctx, g, input.scene_set, n, &name)
+            }
             Step::Gather { bounce: b } => bounce().record_gather(ctx, g, input.scene_set, b, &name),
             Step::Add { bounce: b, last } => {
                 bounce().record_add(ctx, g, input.scene_set, b, last, &name)
@@ -1036,7 +1040,7 @@ pub enum Step {
     SumsClear {
         bounce: u32,
     },
-    /// With `GiSettings::bounce_share`: each 2x2x2 block's gather, before the voxels'.
+    /// With `GiSettings::bounce_share`: each block's gather, before the voxels'.
     ShareGather {
         bounce: u32,
     },

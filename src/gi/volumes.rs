@@ -208,10 +208,11 @@ pub struct Volumes {
     /// nearest cell that holds a filled voxel (R32UI; src/gi/empty_space.rs). None for --paper;
     /// a one-texel stand-in, never read, without `GiSettings::empty_space`.
     pub empty_space: Option<Image>,
-    /// Per 2x2x2 block of voxels, the bounce gather its one-sided voxels share (RGBA32F: light
-    /// and closed share; glsl/inject_bounce.comp). None for --paper; a one-texel stand-in,
+    /// Per block of [`BOUNCE_BLOCK`]^3 voxels, the bounce gather its one-sided voxels share
+    /// (RGBA32F: light and closed share), and which voxel's plane it was made in (R32UI: its
+    /// index + 1, 0 for none); glsl/inject_bounce.comp. None for --paper; one-texel stand-ins,
     /// never read, without a bounce or without `GiSettings::bounce_share`.
-    pub bounce_blocks: Option<Image>,
+    pub bounce_blocks: Option<[Image; 2]>,
     /// Trilinear, transparent black outside the grid.
     pub sampler: Sampler,
     /// The same but from the nearest mip level only: the thin walls, which the bounce's cones
@@ -284,8 +285,10 @@ impl Volumes {
         let thin_walls = thin_wall_volumes(ctx, grid, settings, face_bytes, &mut info)?;
         let empty_space = empty_space_volume(ctx, grid, settings, &mut info)?;
         let shared = settings.bounces >= 2 && settings.bounce_share;
-        let bounce_blocks =
-            Optional::bounce_blocks().make(ctx, n.div_ceil(2), settings, shared, &mut info)?;
+        let blocks = n.div_ceil(BOUNCE_BLOCK);
+        let gathers = Optional::bounce_blocks().make(ctx, blocks, settings, shared, &mut info)?;
+        let firsts = Optional::bounce_firsts().make(ctx, blocks, settings, shared, &mut info)?;
+        let bounce_blocks = gathers.zip(firsts).map(|(g, f)| [g, f]);
         let sampler = volume_sampler(ctx, settings.paper, vk::SamplerMipmapMode::LINEAR)?;
         let level_sampler = volume_sampler(ctx, settings.paper, vk::SamplerMipmapMode::NEAREST)?;
         let [s, d] = data.tables();
@@ -313,6 +316,10 @@ impl Volumes {
         })
     }
 }
+
+/// Voxels a side of the blocks whose one-sided voxels share a bounce gather
+/// (glsl/inject_bounce.comp's BLOCK).
+pub const BOUNCE_BLOCK: u32 = 4;
 
 /// The radiance and directional volumes' texels: RGBA16F, or the paper's RGBA8.
 #[derive(Clone, Copy)]
@@ -415,13 +422,24 @@ impl Optional {
         }
     }
 
-    /// The bounce's gathers shared per 2x2x2 block (`GiSettings::bounce_share`).
+    /// The bounce's gathers shared per block (`GiSettings::bounce_share`).
     fn bounce_blocks() -> Optional {
         Optional {
             name: "bounce gathers of voxel blocks",
-            label: "bounce gathers of 2x2x2 voxel blocks (RGBA32F)",
+            label: "bounce gathers of 4x4x4 voxel blocks (RGBA32F)",
             format: vk::Format::R32G32B32A32_SFLOAT,
             texel_bytes: 16,
+            usage: vk::ImageUsageFlags::STORAGE,
+        }
+    }
+
+    /// Beside them, the voxel in whose plane each was made.
+    fn bounce_firsts() -> Optional {
+        Optional {
+            name: "bounce gather planes of voxel blocks",
+            label: "bounce gather planes of 4x4x4 voxel blocks (R32UI)",
+            format: vk::Format::R32_UINT,
+            texel_bytes: 4,
             usage: vk::ImageUsageFlags::STORAGE,
         }
     }
