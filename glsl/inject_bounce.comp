@@ -10,8 +10,8 @@
 // (FLAG_BOUNCE_SHARE): the SHARE dispatch, run first, one invocation a block, gathers from the
 // middle of the block's first one-sided voxel's plane where no surface rises in front of it,
 // and the voxels in that plane that face its way take that light (bounce light is smooth, and
-// the pixels' cones blur it again). PAPER: the original's 4 cones of aperture 1, 40.9 degrees from the normal, weights
-// pi/3 and 2pi/9, clamped to 1, added to the radiance here.
+// the pixels' cones blur it again). PAPER: the original's 4 cones of aperture 1, 40.9 degrees
+// from the normal, weights pi/3 and 2pi/9, clamped to 1, added to the radiance here.
 #include "common.glsl"
 #include "voxel_common.glsl"
 #define VOXEL_SET 1
