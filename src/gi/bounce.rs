@@ -337,14 +337,13 @@ impl Bounce {
     }
 
     /// Each block of voxels gathers once for its one-sided voxels in a plane (with
-    /// `GiSettings::bounce_share`; before each bounce's gather); `voxels`: the grid's voxels
-    /// a side.
+    /// `GiSettings::bounce_share`; before each bounce's gather).
     pub fn record_share(
         &self,
         ctx: &Context,
         g: &mut Graph,
+        volumes: &Volumes,
         scene_set: vk::DescriptorSet,
-        voxels: u32,
         name: &str,
     ) {
         let p = self
@@ -352,7 +351,7 @@ impl Bounce {
             .as_ref()
             .expect("a shared gather without sharing");
         // One invocation a block, in rows of at most 65535 groups of 64.
-        let m = voxels.div_ceil(BOUNCE_BLOCK) as u64;
+        let m = volumes.grid.resolution.div_ceil(BOUNCE_BLOCK) as u64;
         let groups = (m * m * m).div_ceil(64);
         let x = groups.min(65535);
         let y = groups.div_ceil(x);

@@ -920,10 +920,7 @@ impl Gi {
             Step::VoxelListClear => bounce().record_list_clear(ctx, g, &name),
             Step::VoxelList => bounce().record_list(ctx, g, v, input.scene_set, &name),
             Step::SumsClear { .. } => bounce().record_sums_clear(ctx, g, &name),
-            Step::ShareGather { .. } => {
-                let n = v.grid.resolution;
-                bounce().record_share(ctx, g, input.scene_set, n, &name)
-            }
+            Step::ShareGather { .. } => bounce().record_share(ctx, g, v, input.scene_set, &name),
             Step::Gather { bounce: b } => bounce().record_gather(ctx, g, input.scene_set, b, &name),
             Step::Add { bounce: b, last } => {
                 bounce().record_add(ctx, g, input.scene_set, b, last, &name)
