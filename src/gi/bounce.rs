@@ -355,10 +355,14 @@ impl Bounce {
         let groups = (m * m * m).div_ceil(64);
         let x = groups.min(65535);
         let y = groups.div_ceil(x);
-        p.declare(g.pass(name), 0).record(|cmd| unsafe {
-            p.bind(&ctx.device, cmd, &[(0, scene_set)], 0);
-            ctx.device.cmd_dispatch(cmd, x as u32, y as u32, 1);
-        });
+        p.record_dispatch(
+            ctx,
+            g,
+            name,
+            &[(0, scene_set)],
+            &[],
+            [x as u32, y as u32, 1],
+        );
     }
 
     /// Each listed voxel gathers light from the directional volumes (bounce `bounce`, 2 on).
