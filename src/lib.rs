@@ -3,6 +3,7 @@
 
 pub mod bench;
 pub mod console;
+pub mod corpus;
 pub mod gi;
 pub mod hard;
 pub mod metrics;

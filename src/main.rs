@@ -11,6 +11,8 @@ use voxgi::render::{Mode, RenderSettings, Renderer};
 use voxgi::scene::{self, Scene};
 use voxgi::vk::{Context, ContextDesc};
 
+mod commands;
+
 #[derive(Parser)]
 #[command(
     name = "voxgi",
@@ -81,6 +83,11 @@ enum Command {
     /// validation messages, the frames with NaN or Inf pixels and the NaN or Inf voxels left in
     /// the volumes, per scene and mode; exit status 1 if any is not 0.
     ValidationSweep(SweepCmd),
+    /// A generated scene corpus: its scenes, references and the renderer's error on them
+    ///
+    /// `voxgi corpus generate --out DIR`, then `voxgi corpus run DIR --split held-out`
+    /// (docs/corpus.md).
+    Corpus(commands::corpus::CorpusCmd),
     /// Print a shell completion script (bash, zsh or fish)
     ///
     /// bash: `source <(voxgi completions bash)`; zsh: `voxgi completions zsh > ~/.zfunc/_voxgi`
@@ -1597,6 +1604,7 @@ fn main() -> ExitCode {
         Command::Soak(c) => soak(c),
         Command::ValidationSweep(c) => validation_sweep(c),
         Command::Completions(c) => completions(c),
+        Command::Corpus(c) => commands::corpus::corpus(c),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

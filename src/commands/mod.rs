@@ -1,0 +1,3 @@
+//! The commands that live outside main.rs.
+
+pub mod corpus;

@@ -1,0 +1,240 @@
+//! The corpus's references: each scene path-traced until two independent halves agree, kept in
+//! a cache folder by the hash of the scene's bytes, its sky and the settings, so that a corpus
+//! made again from the same seed, or a run stopped half way, renders nothing twice.
+
+use super::{io_error, CorpusError, SceneRecord};
+use crate::metrics::compare;
+use crate::output::{load_exr, save, write_bytes_atomic, RadianceImage};
+use crate::reference::{render_full, ReferenceSettings};
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+use std::path::{Path, PathBuf};
+
+/// Bumped when the path tracer changes what it computes, so that cached references are made
+/// again.
+pub const REFERENCE_VERSION: u32 = 1;
+
+/// How the references are made.
+#[derive(Clone, Debug)]
+pub struct ReferenceOptions {
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel of each half in the first round; every further round doubles them.
+    pub spp_start: u32,
+    /// The most samples per pixel in all.
+    pub spp_max: u32,
+    /// The reference's own error (an estimate of its relMSE against the converged image) that
+    /// ends the rounds.
+    pub noise_target: f64,
+}
+
+impl Default for ReferenceOptions {
+    fn default() -> Self {
+        ReferenceOptions {
+            width: 128,
+            height: 128,
+            spp_start: 64,
+            spp_max: 16384,
+            // A tenth of the classes' goal for the 90th percentile (relMSE 0.02).
+            noise_target: 0.002,
+        }
+    }
+}
+
+/// What is kept beside a reference image.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct ReferenceInfo {
+    pub scene: String,
+    pub key: String,
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel in all.
+    pub spp: u32,
+    /// relMSE of the two halves against each other, over 4: about the kept image's own relMSE
+    /// against the converged one, which adds to every error measured against it.
+    pub noise: f64,
+    pub seconds: f64,
+    /// Mean radiance (the three channels' mean over the pixels).
+    pub mean: f64,
+    /// The display exposure (stops) that puts the image's log-average luminance at 0.18: both
+    /// images are shown at it for FLIP.
+    pub exposure: f32,
+}
+
+/// A reference found in or added to the cache.
+pub struct Reference {
+    pub image: RadianceImage,
+    pub info: ReferenceInfo,
+}
+
+/// The cache key: the scene file's bytes, its sky, the settings and [`REFERENCE_VERSION`].
+pub fn key(
+    dir: &Path,
+    record: &SceneRecord,
+    opts: &ReferenceOptions,
+) -> Result<String, CorpusError> {
+    let path = dir.join(&record.file);
+    let bytes = std::fs::read(&path).map_err(|e| io_error(&path, e))?;
+    let mut h = Sha256::new();
+    h.update(&bytes);
+    h.update(format!(
+        "{:?} {} {} {} {} {} {}",
+        record.sky,
+        opts.width,
+        opts.height,
+        opts.spp_start,
+        opts.spp_max,
+        opts.noise_target,
+        REFERENCE_VERSION
+    ));
+    let digest = h.finalize();
+    Ok(digest[..8].iter().map(|b| format!("{b:02x}")).collect())
+}
+
+fn paths(cache: &Path, record: &SceneRecord, key: &str) -> (PathBuf, PathBuf) {
+    let stem = format!("{}-{key}", record.name);
+    (
+        cache.join(format!("{stem}.exr")),
+        cache.join(format!("{stem}.json")),
+    )
+}
+
+/// The cached reference of `record`, if there is one for these settings.
+pub fn cached(
+    dir: &Path,
+    cache: &Path,
+    record: &SceneRecord,
+    opts: &ReferenceOptions,
+) -> Result<Option<Reference>, CorpusError> {
+    let key = key(dir, record, opts)?;
+    let (exr, json) = paths(cache, record, &key);
+    if !json.exists() {
+        return Ok(None);
+    }
+    let text = std::fs::read_to_string(&json).map_err(|e| io_error(&json, e))?;
+    let info: ReferenceInfo = serde_json::from_str(&text).map_err(|e| io_error(&json, e))?;
+    let image = load_exr(&exr).map_err(|e| io_error(&exr, e))?;
+    Ok(Some(Reference { image, info }))
+}
+
+/// The reference of `record`: from the cache, or path-traced and kept there.
+pub fn get(
+    dir: &Path,
+    cache: &Path,
+    record: &SceneRecord,
+    opts: &ReferenceOptions,
+) -> Result<Reference, CorpusError> {
+    if let Some(r) = cached(dir, cache, record, opts)? {
+        return Ok(r);
+    }
+    let key = key(dir, record, opts)?;
+    let scene = record.load(dir)?;
+    let r = path_trace(&scene, &record.name, &key, opts);
+    std::fs::create_dir_all(cache).map_err(|e| io_error(cache, e))?;
+    let (exr, json) = paths(cache, record, &key);
+    save(&r.image, &exr, 0.0).map_err(|e| io_error(&exr, e))?;
+    // The record last: it marks the reference as whole.
+    let text = serde_json::to_string_pretty(&r.info).expect("serializes") + "\n";
+    write_bytes_atomic(&json, text.as_bytes()).map_err(|e| io_error(&json, e))?;
+    Ok(r)
+}
+
+/// Two halves of independent samples, doubled each round until they agree within the target.
+fn path_trace(
+    scene: &crate::scene::Scene,
+    name: &str,
+    key: &str,
+    opts: &ReferenceOptions,
+) -> Reference {
+    let start = std::time::Instant::now();
+    let mut halves: [Option<RadianceImage>; 2] = [None, None];
+    let mut spp_half = 0u32;
+    let mut round = 0u64;
+    let mut noise;
+    loop {
+        let add = spp_half.max(opts.spp_start);
+        for (i, half) in halves.iter_mut().enumerate() {
+            let img = render_full(
+                scene,
+                &ReferenceSettings {
+                    width: opts.width,
+                    height: opts.height,
+                    spp: add,
+                    seed: 2 * round + i as u64,
+                    ..Default::default()
+                },
+            )
+            .image;
+            *half = Some(match half.take() {
+                None => img,
+                Some(h) => mix(&h, spp_half, &img, add),
+            });
+        }
+        spp_half += add;
+        round += 1;
+        let [a, b] = [halves[0].as_ref().unwrap(), halves[1].as_ref().unwrap()];
+        noise = compare(a, b).rel_mse / 4.0;
+        if noise <= opts.noise_target || 2 * (spp_half + spp_half) > opts.spp_max {
+            break;
+        }
+    }
+    let [a, b] = halves.map(Option::unwrap);
+    let image = mix(&a, 1, &b, 1);
+    let mean = crate::hard::mean(&image);
+    let info = ReferenceInfo {
+        scene: name.to_string(),
+        key: key.to_string(),
+        width: opts.width,
+        height: opts.height,
+        spp: 2 * spp_half,
+        noise,
+        seconds: start.elapsed().as_secs_f64(),
+        mean,
+        exposure: exposure_for(&image),
+    };
+    Reference { image, info }
+}
+
+/// The mean of `a` (of `na` samples) and `b` (of `nb`), weighed by their samples.
+fn mix(a: &RadianceImage, na: u32, b: &RadianceImage, nb: u32) -> RadianceImage {
+    let (wa, wb) = (na as f32 / (na + nb) as f32, nb as f32 / (na + nb) as f32);
+    RadianceImage {
+        pixels: a
+            .pixels
+            .iter()
+            .zip(&b.pixels)
+            .map(|(p, q)| std::array::from_fn(|c| p[c] * wa + q[c] * wb))
+            .collect(),
+        ..a.clone()
+    }
+}
+
+/// The exposure (stops) that maps the log-average luminance of `img` to 0.18.
+pub fn exposure_for(img: &RadianceImage) -> f32 {
+    let n = img.pixels.len().max(1) as f64;
+    let log_sum: f64 = img
+        .pixels
+        .iter()
+        .map(|p| {
+            let l = 0.2126 * p[0] as f64 + 0.7152 * p[1] as f64 + 0.0722 * p[2] as f64;
+            (l.max(0.0) + 1e-4).ln()
+        })
+        .sum();
+    let average = (log_sum / n).exp();
+    ((0.18 / average).log2() as f32).clamp(-20.0, 20.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exposure_puts_the_log_average_at_a_key_of_0_18() {
+        let img = RadianceImage {
+            width: 2,
+            height: 1,
+            pixels: vec![[0.045; 3], [0.045; 3]],
+        };
+        assert!((exposure_for(&img) - 2.0).abs() < 0.01);
+    }
+}
