@@ -457,6 +457,45 @@ pub fn load_report(path: &Path) -> Result<Report, CorpusError> {
 mod tests {
     use super::*;
 
+    fn report(p90: f64, noise: f64) -> Report {
+        let spread = |v: f64| Spread {
+            median: v,
+            p90: v,
+            worst: v,
+            worst_scene: "x".into(),
+        };
+        let class = ClassSummary {
+            class: "openings".into(),
+            scenes: 1,
+            rel_mse: spread(p90),
+            flip: spread(0.1),
+            mean_error: spread(0.0),
+            still_frame_ms_median: 1.0,
+            first_frame_ms_median: 1.0,
+            reference_noise_max: noise,
+        };
+        Report {
+            command_line: String::new(),
+            split: None,
+            width: 1,
+            height: 1,
+            device: String::new(),
+            classes: vec![class.clone()],
+            all: class,
+            scenes: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn a_class_worse_than_its_baseline_by_more_than_the_noise_is_named() {
+        let base = report(0.05, 0.001);
+        assert!(regressions(&report(0.0505, 0.001), &base).is_empty());
+        assert!(regressions(&report(0.04, 0.001), &base).is_empty());
+        let worse = regressions(&report(0.052, 0.001), &base);
+        assert_eq!(worse.len(), 1);
+        assert!(worse[0].starts_with("openings"), "{worse:?}");
+    }
+
     #[test]
     fn percentiles_are_nearest_rank() {
         let v: Vec<(f64, &str)> = (1..=10).map(|i| (i as f64, "x")).collect();
