@@ -132,6 +132,7 @@ impl Selection {
                 .dir
                 .join(format!("report-{}", self.split.map_or("all", |s| s.name()))),
             worst: 2,
+            save_images: false,
             command_line: voxgi::bench::shell_words(
                 &std::iter::once("voxgi".to_string())
                     .chain(std::env::args().skip(1))
@@ -169,6 +170,9 @@ struct RunCmd {
     /// The worst scenes of each class shown beside their references
     #[arg(long, value_name = "K", default_value_t = 2)]
     worst: usize,
+    /// Also write every scene's image (OUT/NAME.exr)
+    #[arg(long)]
+    save_images: bool,
     /// Fail when a class's 90th-percentile relMSE grows past this earlier run's (its
     /// results.json) by more than the references' noise
     #[arg(long, value_name = "FILE.json")]
@@ -223,6 +227,7 @@ fn run(r: RunCmd) -> Result<()> {
     opts.shadow_resolution = r.shadow_res;
     opts.area_shadow_resolution = r.area_shadow_res;
     opts.worst = r.worst;
+    opts.save_images = r.save_images;
     if let Some(out) = r.out {
         opts.out = out;
     }

@@ -34,7 +34,7 @@ impl Default for ReferenceOptions {
             width: 128,
             height: 128,
             spp_start: 64,
-            spp_max: 16384,
+            spp_max: 8192,
             // A tenth of the classes' goal for the 90th percentile (relMSE 0.02).
             noise_target: 0.002,
         }

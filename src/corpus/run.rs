@@ -35,6 +35,8 @@ pub struct RunOptions {
     pub out: PathBuf,
     /// The worst scenes of each class shown beside their references.
     pub worst: usize,
+    /// Also write every scene's image (OUT/NAME.exr).
+    pub save_images: bool,
     /// The command line, for the report.
     pub command_line: String,
 }
@@ -263,6 +265,10 @@ pub fn run(ctx: &Arc<Context>, opts: &RunOptions) -> Result<Report, CorpusError>
             validation_messages,
             description: record.description.clone(),
         });
+        if opts.save_images {
+            let path = opts.out.join(format!("{}.exr", record.name));
+            crate::output::save(&image, &path, 0.0).map_err(|e| io_error(&path, e))?;
+        }
         images.push(image);
         bar.inc(1);
     }
