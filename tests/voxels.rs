@@ -516,30 +516,81 @@ fn a_grid_past_the_storage_buffer_range_voxelizes_and_one_past_the_device_is_ref
     );
 }
 
+/// The albedo of `brdf` seen from every direction, cosine-weighted: what a surface reflects of
+/// the light from a uniform sky, integrated on a grid of view and light directions.
+fn hemispherical_albedo(brdf: &voxgi::reference::brdf::Brdf) -> Vec3 {
+    let n = 48;
+    let dir = |i: usize, j: usize| {
+        // Cosine-weighted over the view, uniform over the light (then weighted by its cosine).
+        let (u, v) = ((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+        (u, std::f32::consts::TAU * v)
+    };
+    let mut sum = Vec3::ZERO;
+    for a in 0..n {
+        for b in 0..n {
+            let (u, phi) = dir(a, b);
+            let ct = u.sqrt();
+            let wo = Vec3::new(
+                (1.0 - u).sqrt() * phi.cos(),
+                (1.0 - u).sqrt() * phi.sin(),
+                ct,
+            );
+            for c in 0..n {
+                for d in 0..n / 4 {
+                    let (ci, phi_i) = (
+                        (c as f32 + 0.5) / n as f32,
+                        std::f32::consts::TAU * (d as f32 + 0.5) / (n / 4) as f32,
+                    );
+                    let si = (1.0 - ci * ci).sqrt();
+                    let wi = Vec3::new(si * phi_i.cos(), si * phi_i.sin(), ci);
+                    // Uniform over the hemisphere: density 1 / (2 pi).
+                    sum += brdf.eval(wo, wi) * ci * std::f32::consts::TAU;
+                }
+            }
+        }
+    }
+    sum / (n * n * n * (n / 4)) as f32
+}
+
 #[test]
-fn voxels_keep_the_diffuse_albedo_only() {
-    // Four horizontal quads of base colour 0.8, each in its own layer of voxels (32^3 with a
-    // voxel of padding: origin -1/30, voxels of 1/30, so y = 0.25 is the middle of layer 8).
+fn voxels_reflect_the_diffuse_albedo_and_the_wide_specular_lobes() {
+    // Horizontal quads of base colour 0.8, each in its own layer of voxels (32^3 with a voxel
+    // of padding: origin -1/30, voxels of 1/30, so y = 0.25 is the middle of layer 8).
     let base = 0.8;
-    // Schlick's cosine-weighted mean of a dielectric's Fresnel term, f0 + (f90 - f0) / 21,
-    // with glTF's f0 = 0.04 and f90 = 1 (specularFactor 1).
-    let fresnel = 0.04 + 0.96 / 21.0;
+    // (metallic, roughness, specularFactor, expected voxel albedo, how close): below
+    // roughness 0.1 the diffuse albedo only (a smooth lobe is no Lambertian surface); from 0.6
+    // up all the light the BRDF reflects, as the path tracer's BRDF integrates it.
+    let brdf = |base: f32, metallic: f32, roughness: f32| {
+        let b = voxgi::reference::brdf::Brdf::new(
+            Vec3::splat(base),
+            metallic,
+            roughness,
+            1.0,
+            Vec3::ONE,
+        );
+        hemispherical_albedo(&b).x
+    };
+    // A dielectric's specular layer does not depend on its base colour: what the base colour
+    // adds is its diffuse albedo.
+    let diffuse = brdf(base, 0.0, 0.05) - brdf(0.0, 0.0, 0.05);
     let cases = [
-        // (metallic, specularFactor, expected voxel albedo, paper's)
-        (1.0, 1.0, 0.0),
-        (0.5, 1.0, 0.5 * base * (1.0 - fresnel)),
-        (0.0, 1.0, base * (1.0 - fresnel)),
-        (0.0, 0.0, base),
+        (1.0, 0.05, 1.0, 0.0, 1e-3),
+        (0.5, 0.05, 1.0, 0.5 * diffuse, 3e-3),
+        (0.0, 0.05, 1.0, diffuse, 3e-3),
+        (0.0, 0.05, 0.0, base, 1e-3),
+        (1.0, 1.0, 1.0, brdf(base, 1.0, 1.0), 0.02),
+        (1.0, 0.7, 1.0, brdf(base, 1.0, 0.7), 0.02),
+        (0.0, 0.8, 1.0, brdf(base, 0.0, 0.8), 0.02),
     ];
-    let heights = [0.25f32, 0.45, 0.65, 0.85];
+    let heights = [0.15f32, 0.25, 0.35, 0.45, 0.55, 0.65, 0.75];
     let mut s = empty_scene();
     let anchor_m = lambert(&mut s, Vec3::splat(0.5));
     anchor(&mut s, anchor_m);
-    for (&(metallic, specular, _), &y) in cases.iter().zip(&heights) {
+    for (&(metallic, roughness, specular, _, _), &y) in cases.iter().zip(&heights) {
         s.materials.push(Material {
             base_color: Vec3::splat(base).extend(1.0),
             metallic,
-            roughness: 0.5,
+            roughness,
             specular_factor: specular,
             ..Material::default()
         });
@@ -548,12 +599,12 @@ fn voxels_keep_the_diffuse_albedo_only() {
     }
     for paper in [false, true] {
         let d = render_voxels(&s, voxel_settings(32, paper, Mode::VoxelsAlbedo));
-        for (&(metallic, specular, expected), &y) in cases.iter().zip(&heights) {
+        for (&(metallic, roughness, specular, expected, tol), &y) in cases.iter().zip(&heights) {
             // --paper keeps the original's base colour, gamma-encoded (in RGBA8).
             let (expected, tol) = if paper {
                 (base.powf(1.0 / 2.2), 1.0 / 255.0)
             } else {
-                (expected, 1e-3)
+                (expected, tol)
             };
             let layer = ((y + 1.0 / 30.0) * 30.0).floor() as u32;
             let mut checked = 0;
@@ -565,8 +616,8 @@ fn voxels_keep_the_diffuse_albedo_only() {
                     let a = d.albedo[i];
                     assert!(
                         (a - Vec3::splat(expected)).abs().max_element() <= tol,
-                        "metallic {metallic}, specularFactor {specular}, paper {paper}: \
-                         voxel albedo {a}, expected {expected}"
+                        "metallic {metallic}, roughness {roughness}, specularFactor {specular}, \
+                         paper {paper}: voxel albedo {a}, expected {expected}"
                     );
                     checked += 1;
                 }
