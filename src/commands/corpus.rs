@@ -84,7 +84,7 @@ struct Selection {
     #[arg(long, value_name = "DIR")]
     cache: Option<PathBuf>,
     /// Image side in pixels (references and renders)
-    #[arg(long, default_value_t = 128, value_parser = clap::value_parser!(u32).range(8..=4096))]
+    #[arg(long, default_value_t = ReferenceOptions::default().width, value_parser = clap::value_parser!(u32).range(8..=4096))]
     size: u32,
     /// The references' own error (relMSE against converged, estimated) that ends their rounds
     #[arg(long, default_value_t = ReferenceOptions::default().noise_target)]
