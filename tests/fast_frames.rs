@@ -207,10 +207,14 @@ fn blocks_share_a_specular_cone_only_where_it_matches_the_pixels() {
         // less, so single pixels differ by far more than their light (no per-pixel bound).
         // Sharing regardless of the reflection's direction: 9.1e-3 and 5.3%, 3.2e-3 and 4.1%
         // (the column's faces took their neighbours' reflections).
+        // Since the voxels hold a rough lobe's light (voxelize.frag's voxel_albedo) the metal
+        // floor and column are lit in the voxels, where they were black, and the reflections
+        // the blocks share carry that light: 0.35 relMSE 2.4e-3, 3.7% off; 0.6 2.5e-3 (7.3e-4
+        // when the metals' voxels were black), 2.5%.
         let (max_e, max_off) = if roughness < 0.5 {
             (3.5e-3, 0.05)
         } else {
-            (1e-3, 0.035)
+            (3e-3, 0.035)
         };
         assert!(e < max_e, "roughness {roughness}: relMSE {e}");
         assert!(

@@ -558,8 +558,8 @@ fn voxels_reflect_the_diffuse_albedo_and_the_wide_specular_lobes() {
     // of padding: origin -1/30, voxels of 1/30, so y = 0.25 is the middle of layer 8).
     let base = 0.8;
     // (metallic, roughness, specularFactor, expected voxel albedo, how close): below
-    // roughness 0.1 the diffuse albedo only (a smooth lobe is no Lambertian surface); from 0.6
-    // up all the light the BRDF reflects, as the path tracer's BRDF integrates it.
+    // roughness 0.15 the diffuse albedo only (a smooth lobe is no Lambertian surface); from
+    // 0.65 up all the light the BRDF reflects, as the path tracer's BRDF integrates it.
     let brdf = |base: f32, metallic: f32, roughness: f32| {
         let b = voxgi::reference::brdf::Brdf::new(
             Vec3::splat(base),
