@@ -334,6 +334,24 @@ bool polygon_near(AreaPolygon poly, vec3 p, float reach) {
     return true;
 }
 
+// One polygon's part of area_vector_form_factor.
+vec3 polygon_vector(Light light, AreaPolygon poly, vec3 p, float reach) {
+    bool two_sided = light.radiance.w > 0.5;
+    float side = area_side(poly, p);
+    if (side == 0.0 || (side < 0.0 && !two_sided)) return vec3(0.0);
+    if (reach > 0.0 && polygon_near(poly, p, reach)) return vec3(0.0);
+    Outline o = area_outline(poly, p);
+    vec3 first_corner = outline_corner(o, 0u) - p;
+    vec3 a = first_corner;
+    vec3 sum = vec3(0.0);
+    for (uint k = 0u; k < o.count; k++) {
+        vec3 b = k + 1u == o.count ? first_corner : outline_corner(o, k + 1u) - p;
+        sum += edge_term(a, b);
+        a = b;
+    }
+    return -side * sum / (2.0 * PI);
+}
+
 // The vector form factor of the light's polygons (unclipped): for any normal above all of
 // them, dot(normal, it) is the form factor; its direction is where the light comes from on
 // average. For the voxels' normal-weighted lighting. Polygons within `reach` of p are left
@@ -343,25 +361,11 @@ bool polygon_near(AreaPolygon poly, vec3 p, float reach) {
 vec3 area_vector_form_factor(Light light, vec3 p, float reach) {
     uint first = uint(light.cone.x);
     uint count = uint(light.cone.y);
-    bool two_sided = light.radiance.w > 0.5;
     vec3 f = vec3(0.0);
     for (uint i = 0u; i < count; i++) {
-        AreaPolygon poly = area_polygons[first + i];
-        float side = area_side(poly, p);
-        if (side == 0.0 || (side < 0.0 && !two_sided)) continue;
-        if (reach > 0.0 && polygon_near(poly, p, reach)) continue;
-        Outline o = area_outline(poly, p);
-        vec3 first_corner = outline_corner(o, 0u) - p;
-        vec3 a = first_corner;
-        vec3 sum = vec3(0.0);
-        for (uint k = 0u; k < o.count; k++) {
-            vec3 b = k + 1u == o.count ? first_corner : outline_corner(o, k + 1u) - p;
-            sum += edge_term(a, b);
-            a = b;
-        }
-        f -= side * sum;
+        f += polygon_vector(light, area_polygons[first + i], p, reach);
     }
-    return f / (2.0 * PI);
+    return f;
 }
 
 #ifdef BRDF_GLSL

@@ -99,6 +99,47 @@ float patch_irradiance(vec3 from, vec3 s, vec3 n, float vs) {
 }
 #endif
 
+#ifndef PAPER
+// 1 when no point of the segment a to b, sampled a voxel apart, lies in a filled voxel; else 0.
+float segment_open(vec3 a, vec3 b) {
+    float vs = voxel_size();
+    vec3 d = b - a;
+    int steps = int(length(d) / vs);
+    for (int i = 1; i < steps; i++) {
+        ivec3 c = ivec3(floor(world_to_grid(a + d * (float(i) / float(steps))) * float(grid_n())));
+        if (in_grid(c) && voxel_filled(c)) return 0.0;
+    }
+    return 1.0;
+}
+
+// How much of an area light's polygon the point `from` sees through the voxels: the segments to
+// five points on it (its centre and halfway to four of its corners; a sphere's the same on the
+// disc it shows `from`), each ending a voxel and a half in front of the polygon so that its
+// own voxels do not count.
+float polygon_seen(AreaPolygon poly, vec3 from) {
+    float vs = voxel_size();
+    Outline o = area_outline(poly, from);
+    vec3 centre = o.centre;
+    vec3 out_dir = poly.plane.xyz * area_side(poly, from);
+    if (o.sphere) {
+        vec4 s = area_vertices[poly.range.x];
+        out_dir = normalize(from - s.xyz);
+        centre = s.xyz + out_dir * s.w;
+    } else {
+        for (uint k = 0u; k < o.count; k++) centre += outline_corner(o, k);
+        centre /= float(o.count);
+    }
+    vec3 lift = out_dir * 1.5 * vs;
+    float open = segment_open(from, centre + lift);
+    for (uint i = 0u; i < 4u; i++) {
+        uint k = o.sphere ? 2u * i : i * o.count / 4u;
+        vec3 corner = o.sphere ? centre + (outline_corner(o, k) - o.centre) : outline_corner(o, k);
+        open += segment_open(from, mix(centre, corner, 0.5) + lift);
+    }
+    return open / 5.0;
+}
+#endif
+
 // The direct light falling on the surfaces of a voxel at p facing n (or, two-sided, both ways),
 // with axis weights w and its surfaces at s; for a two-sided voxel also the sides it falls on,
 // weighted by the light they reflect (lit_side).
@@ -144,6 +185,25 @@ vec3 direct_irradiance(vec3 p, vec3 s, vec3 n, vec3 w, bool two_sided, vec3 albe
         float vis = (frame.grid_info.w & FLAG_VOXEL_SHADOWS) != 0u
             ? voxel_visibility(q, l, dist)
             : shadow_visibility(light, q, side, shadow_map, area_shadow_map);
+#ifndef PAPER
+        if (uint(light.position_type.w) == LIGHT_AREA && vis < 0.999) {
+            // In the shadow of the light's centre, where its faces may still be seen (an
+            // emissive cube on a pedestal of its footprint hides the floor around the pedestal
+            // from its centre, not from its sides): each polygon shadowed by the voxels between
+            // it and q instead.
+            vec3 f = vec3(0.0);
+            for (uint k = 0u; k < uint(light.cone.y); k++) {
+                AreaPolygon poly = area_polygons[uint(light.cone.x) + k];
+                vec3 fk = polygon_vector(light, poly, p, vs);
+                if (dot(fk, fk) > 0.0) f += fk * polygon_seen(poly, q);
+            }
+            float len = length(f);
+            l = len > 0.0 ? f / len : l;
+            e = light.radiance.rgb * (PI * len);
+            n_dot_l = dot(w, two_sided ? abs(l) : max(sign(n) * l, vec3(0.0)));
+            vis = 1.0;
+        }
+#endif
         irradiance += e * n_dot_l * vis;
         if (two_sided) {
             lit_side += luminance(albedo * e * n_dot_l * vis) * normalize(w * l + 1e-12);
