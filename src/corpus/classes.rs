@@ -229,6 +229,19 @@ fn openings(d: &mut Draw, draft: &mut Draft, outside: Outside) {
         );
         draft.note(format!("on a ground {:.0} m across", 2.0 * g));
     }
+    let (main_side, lit_sides) = cut_openings(d, draft, &mut room);
+    draft.parts("room", room.primitives());
+    let n = d.int(0, 3);
+    crates(d, draft, size, n);
+
+    light_from_outside(d, draft, &room, main_side, &lit_sides);
+    openings_view(d, draft, &room, main_side, outside.inside);
+}
+
+/// The openings in the room's walls (and now and then its ceiling): the side most of the light
+/// comes through, and every side that has an opening.
+fn cut_openings(d: &mut Draw, draft: &mut Draft, room: &mut Room) -> (usize, Vec<usize>) {
+    let size = room.size;
     let opening = d.pick(&[
         Opening::OpenSide,
         Opening::Windows,
@@ -244,11 +257,11 @@ fn openings(d: &mut Draw, draft: &mut Draft, outside: Outside) {
         }
         Opening::Windows => {
             let n = d.int(1, 3);
-            room.holes[main_side] = windows(d, &room, main_side, n);
+            room.holes[main_side] = windows(d, room, main_side, n);
             if d.chance(0.4) {
                 let other = d.pick(&[0usize, 1, 4, 5]);
                 if other != main_side {
-                    room.holes[other] = windows(d, &room, other, 1);
+                    room.holes[other] = windows(d, room, other, 1);
                     lit_sides.push(other);
                 }
             }
@@ -268,7 +281,7 @@ fn openings(d: &mut Draw, draft: &mut Draft, outside: Outside) {
                 let other = d.pick(&[0usize, 1, 4, 5]);
                 if other != main_side {
                     let n = d.int(1, 2);
-                    room.holes[other] = windows(d, &room, other, n);
+                    room.holes[other] = windows(d, room, other, n);
                     lit_sides.push(other);
                     draft.note("and windows");
                 }
@@ -284,11 +297,17 @@ fn openings(d: &mut Draw, draft: &mut Draft, outside: Outside) {
         });
         draft.note("a skylight");
     }
-    draft.parts("room", room.primitives());
-    let n = d.int(0, 3);
-    crates(d, draft, size, n);
+    (main_side, lit_sides)
+}
 
-    // The light.
+/// A sun and a sky, a sky alone, or a lamp outside the room's main opening.
+fn light_from_outside(
+    d: &mut Draw,
+    draft: &mut Draft,
+    room: &Room,
+    main_side: usize,
+    lit_sides: &[usize],
+) {
     let light = d.weighted(&[(0.45, 0), (0.35, 1), (0.2, 2)]);
     match light {
         0 | 1 => {
@@ -303,7 +322,7 @@ fn openings(d: &mut Draw, draft: &mut Draft, outside: Outside) {
                 let el = d.uniform(15.0, 65.0).to_radians();
                 // Mostly towards an opening, so that the sun comes in.
                 let az = if d.chance(0.7) {
-                    let (axis, _, into) = room.plane(d.pick(&lit_sides));
+                    let (axis, _, into) = room.plane(d.pick(lit_sides));
                     let towards = if axis == 0 {
                         -into * Vec3::X
                     } else {
@@ -332,9 +351,12 @@ fn openings(d: &mut Draw, draft: &mut Draft, outside: Outside) {
             draft.note(format!("a {i:.0} W/sr light outside"));
         }
     }
+}
 
-    // The camera.
-    if d.chance(outside.inside) {
+/// The camera: inside (a share `inside` of the scenes) or outside the main opening.
+fn openings_view(d: &mut Draw, draft: &mut Draft, room: &Room, main_side: usize, inside: f64) {
+    let size = room.size;
+    if d.chance(inside) {
         inside_view(d, draft, size);
         draft.note("seen from inside");
     } else {
