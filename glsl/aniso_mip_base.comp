@@ -29,6 +29,9 @@ layout(set = 0, binding = 11, rgba16f) uniform readonly image3D back_radiance;
 // without a bounce.
 layout(set = 0, binding = 12, rgba16f) uniform writeonly image3D thin_walls_xy;
 layout(set = 0, binding = 13, rgba16f) uniform writeonly image3D thin_walls_z;
+// The light of mirror-like lobes (inject_radiance.comp), which the full-resolution volume leaves
+// out: the directional volumes, which wide cones read, hold it.
+layout(set = 0, binding = 14, rgba16f) uniform readonly image3D glossy_radiance;
 // 1: make the thin walls (the first mip pass after the voxels are lit; they hold through the
 // bounces, changing with the voxels rather than the light).
 layout(push_constant) uniform Push {
@@ -114,6 +117,7 @@ void main() {
         bool inside = all(lessThan(s, imageSize(radiance)));
         block[i] = inside ? imageLoad(radiance, s) : vec4(0.0);
 #ifndef PAPER
+        if (inside) block[i].rgb += imageLoad(glossy_radiance, s).rgb;
         dirs[i] = inside ? imageLoad(emit_dir, s) : vec4(0.0);
         back[i] = inside && backs ? imageLoad(back_radiance, s).rgb : vec3(0.0);
         float e = inside && emits ? imageLoad(small_emission, s).r : 0.0;

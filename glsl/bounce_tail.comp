@@ -32,6 +32,9 @@ layout(set = 1, binding = 12, std430) readonly buffer Reflectance { uint reflect
 // Open backs' light (inject_radiance.comp), with FLAG_BACKS; the reflected buffers then hold a
 // second entry a voxel, its back's (inject_bounce.comp).
 layout(set = 1, binding = 14, rgba16f) uniform image3D back_radiance;
+// The light of mirror-like lobes (inject_radiance.comp): a voxel's glossy share of its bounce
+// light goes there, as its direct light's did.
+layout(set = 1, binding = 15, rgba16f) uniform image3D glossy_radiance;
 
 // Lambda is kept at most 0.8 (5 times the last bounce): the voxels, whose light the radiance
 // scale keeps under about 1e4, stay within half floats. The series multiplies what the last
@@ -77,17 +80,20 @@ void main() {
     float side = unpackHalf2x16(reflected[k].y).y;
     if (backs && open_back(c, v)) {
         vec4 direct = imageLoad(back_radiance, c);
-        imageStore(back_radiance, c, vec4(direct.rgb + with_tail(k + 1u, 8u), 0.0));
+        vec3 back = with_tail(k + 1u, 8u) * (1.0 - v.glossy);
+        imageStore(back_radiance, c, vec4(direct.rgb + back, 0.0));
     }
     vec4 direct = imageLoad(radiance, c);
+    vec3 glossy = imageLoad(glossy_radiance, c).rgb;
     if (side <= 1.0) {
         // A two-sided voxel: its light goes the way of its direct and bounce light, by their
         // luminance.
         vec3 dir = imageLoad(emit_dir, c).xyz;
-        float ld = luminance(direct.rgb), lb = luminance(bounce);
+        float ld = luminance(direct.rgb + glossy), lb = luminance(bounce);
         vec3 going = (dir * ld + voxel_facing(v) * side * lb) / max(ld + lb, 1e-30);
         float along = dot(going, going) > 0.0 ? dot(v.offset, normalize(going)) : 0.0;
         imageStore(emit_dir, c, vec4(going, along));
     }
-    imageStore(radiance, c, vec4(direct.rgb + bounce, direct.a));
+    imageStore(glossy_radiance, c, vec4(glossy + bounce * v.glossy, 0.0));
+    imageStore(radiance, c, vec4(direct.rgb + bounce * (1.0 - v.glossy), direct.a));
 }

@@ -30,6 +30,10 @@ layout(set = 1, binding = 10, r32f) uniform writeonly image3D small_emission;
 // The light the backs of open-backed voxels reflect (voxel_data.glsl's open_back), as the
 // radiance volume's (opacity 0: the front's counts). One texel, not written, without FLAG_BACKS.
 layout(set = 1, binding = 12, rgba16f) uniform writeonly image3D back_radiance;
+// The light of mirror-like lobes (voxel_data.glsl: Voxel.glossy), as the radiance volume's but
+// without opacity: it goes one way, which depends on where it came from, so only wide cones
+// (the directional volumes: aniso_mip_base.comp adds it) take it, as its mean.
+layout(set = 1, binding = 13, rgba16f) uniform writeonly image3D glossy_radiance;
 #endif
 
 #ifdef PAPER
@@ -224,7 +228,7 @@ void main() {
             vec3 unused = vec3(0.0);
             vec3 e = direct_irradiance(voxel_centre(c), voxel_centre(c) + v.offset * voxel_size(),
                                        -v.normal, v.axis_weights, false, v.albedo, unused);
-            back = v.albedo / PI * e * frame.tuning.y;
+            back = v.albedo * (1.0 - v.glossy) / PI * e * frame.tuning.y;
         }
         imageStore(back_radiance, c, vec4(back, 0.0));
     }
@@ -233,6 +237,7 @@ void main() {
         imageStore(radiance, c, vec4(0.0));
 #ifndef PAPER
         imageStore(emit_dir, c, vec4(0.0));
+        imageStore(glossy_radiance, c, vec4(0.0));
         if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u) imageStore(small_emission, c, vec4(0.0));
 #endif
         return;
@@ -259,7 +264,8 @@ void main() {
 #ifdef PAPER
     vec3 outgoing = v.albedo * irradiance + v.emission;
 #else
-    vec3 outgoing = v.albedo / PI * irradiance + v.emission;
+    vec3 reflected = v.albedo / PI * irradiance;
+    vec3 outgoing = reflected + v.emission;
     // One-sided: the averaged normal (shorter where the surfaces bend). Two-sided: the sides the
     // lights fall on; the emission (which side is unknown) goes every way.
     vec3 dir = two_sided ? lit_side / PI / max(luminance(outgoing), 1e-30)
@@ -272,6 +278,8 @@ void main() {
         float small = 1.0 - min(v.emitter_cover, 1.0);
         imageStore(small_emission, c, vec4(luminance(v.emission) * small * frame.tuning.y));
     }
+    imageStore(glossy_radiance, c, vec4(reflected * v.glossy * frame.tuning.y, 0.0));
+    outgoing -= reflected * v.glossy;
 #endif
     imageStore(radiance, c, vec4(outgoing * frame.tuning.y, 1.0));
 }

@@ -22,11 +22,12 @@ layout(buffer_reference, std430, buffer_reference_align = 4) buffer Words { uint
 
 // Per voxel, in three buffers (each within a 2 GiB allocation at 512^3): count, albedo r g b;
 // normal x y z (two's complement) and where the surfaces cross the voxel along their
-// projection's axis, from its centre (two's complement, in voxels); squared normal x y z. The
-// squared normals keep the axes a voxel's surfaces face even where opposite normals cancel.
+// projection's axis, from its centre (two's complement, in voxels); squared normal x y z and the
+// luminance of the albedo's glossy part (voxelize.frag: voxel_albedo). The squared normals keep
+// the axes a voxel's surfaces face even where opposite normals cancel.
 const uint ALBEDO_STRIDE = 4u;
 const uint NORMAL_STRIDE = 4u;
-const uint SPREAD_STRIDE = 3u;
+const uint SPREAD_STRIDE = 4u;
 // Per voxel: emission r g b (scaled by frame.cone.w).
 const uint EMISSION_STRIDE = 4u;  // RGB weighted by coverage, emitters' coverage (volumes.rs)
 // 12 fractional bits: a 32-bit sum holds 2^20 fragments of value 1; the quantisation of one

@@ -8,6 +8,8 @@
 struct Voxel {
     bool filled;
     vec3 albedo;
+    float glossy;       // the share of its reflected light a mirror's lobe sends one way (0 to
+                        // 1): shown only to wide cones (voxelize.frag: voxel_albedo)
     vec3 normal;        // unit, or zero when the averaged normals cancelled
     float agreement;    // length of the averaged unit normals: 1 flat, ~0 opposite faces
     vec3 axis_weights;  // mean squared normal: how much the surfaces face each axis (sums to 1)
@@ -32,6 +34,7 @@ Voxel load_voxel(ivec3 c) {
     vec4 a = imageLoad(paper_albedo, c);
     v.filled = a.a > 0.0;
     v.albedo = a.rgb;
+    v.glossy = 0.0;
     vec3 n = imageLoad(paper_normal, c).rgb * 2.0 - 1.0;
     v.agreement = length(n);
     v.normal = v.agreement > 0.0 ? n / v.agreement : vec3(0.0);
@@ -67,6 +70,7 @@ Voxel load_voxel(ivec3 c) {
     ivec3 n = ivec3(sn.w[k], sn.w[k + 1u], sn.w[k + 2u]);
     int off = int(sn.w[k + 3u]);
     uvec3 n2 = uvec3(ss.w[q], ss.w[q + 1u], ss.w[q + 2u]);
+    uint g = ss.w[q + 3u];
     bool dynamic = (frame.grid_info.w & FLAG_DYNAMIC) != 0u;
     if (dynamic) {
         Words da = Words(dynamic_words[WORDS_ALBEDO]);
@@ -77,10 +81,13 @@ Voxel load_voxel(ivec3 c) {
         n += ivec3(dn.w[k], dn.w[k + 1u], dn.w[k + 2u]);
         off += int(dn.w[k + 3u]);
         n2 += uvec3(ds.w[q], ds.w[q + 1u], ds.w[q + 2u]);
+        g += ds.w[q + 3u];
     }
     v.filled = count > 0u;
     float inv = v.filled ? 1.0 / (float(count) * FIXED_ONE) : 0.0;
     v.albedo = vec3(a) * inv;
+    float reflected = luminance(v.albedo);
+    v.glossy = reflected > 0.0 ? clamp(float(g) * inv / reflected, 0.0, 1.0) : 0.0;
     vec3 nf = vec3(n) * inv;
     v.agreement = length(nf);
     v.normal = v.agreement > 1e-6 ? nf / v.agreement : vec3(0.0);

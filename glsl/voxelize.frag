@@ -91,21 +91,27 @@ ivec3 unswizzle(ivec3 c) {
 // What a voxel reflects, shining like a Lambertian surface: the BRDF's diffuse albedo (none
 // for a metal; a dielectric's base colour less what its Fresnel term F(v.h) takes, whose
 // Schlick weight (1 - v.h)^5 averages 0.0037 over cosine-weighted pairs of directions; the
-// mean over one direction, 1/21, took 4.5% too much), plus the share of its specular lobe's albedo
-// that a wide lobe spreads about as a Lambertian surface would: none below roughness 0.15,
-// all of it above 0.65. Without it a copper floor of roughness 0.56 sent no light into its
-// room (the corpus's materials class, the image's mean 0.67 of the path tracer's); with all
-// of it at every roughness a smooth metal sphere lit its neighbours as though it were chalk
-// (and from 0.1 to 0.6, DamagedHelmet under the bundled sky passed issue 31's goal of 0.02).
+// mean over one direction, 1/21, took 4.5% too much), plus its specular lobe's albedo.
+// `glossy`: the luminance of the part of it a voxel shows only to wide cones (the directional
+// volumes, not the full-resolution one: inject_radiance.comp): the lobe's albedo less the
+// share a wide lobe spreads about as a Lambertian surface would (none below roughness 0.15,
+// all of it above 0.65). A mirror's light goes one way, which depends on where it came from:
+// seen by a narrow cone its mean is wrong (a smooth metal tile glowed in its own reflection,
+// NormalTangentTest relMSE 0.016 -> 0.32; DamagedHelmet 0.019 -> 0.077), while the wide cones
+// that gather light for diffuse surfaces take its mean over many directions, which is its
+// albedo times its light: without it a silver floor sent no light into its room (the corpus's
+// materials class, the image's mean 0.47 of the path tracer's).
 // The lobe's albedo is GGX's with height-correlated Smith masking, cosine-weighted over the
 // view, fitted within 0.02: F0 (lobe - rim) + F90 rim (single scattering loses up to 60% of
 // it at roughness 1).
-vec3 voxel_albedo(vec3 base, float metallic, float roughness, vec3 f0, float f90) {
+vec3 voxel_albedo(vec3 base, float metallic, float roughness, vec3 f0, float f90,
+                  out float glossy) {
     vec3 diffuse = base * (1.0 - metallic) * (1.0 - (f0 + (f90 - f0) * 0.0037));
     float lobe = clamp(1.0 + 0.1027 * roughness - 0.7139 * roughness * roughness, 0.0, 1.0);
     float rim = 0.0504 - 0.0713 * roughness + 0.0217 * roughness * roughness;
     vec3 specular = mix(f0 * (lobe - rim) + f90 * rim, base * (lobe - rim) + rim, metallic);
-    return diffuse + smoothstep(0.15, 0.65, roughness) * specular;
+    glossy = luminance(clamp(specular, 0.0, 1.0)) * (1.0 - smoothstep(0.15, 0.65, roughness));
+    return diffuse + specular;
 }
 #endif
 
@@ -157,8 +163,10 @@ void main() {
     float roughness = clamp(m.params.y * texture(t_metallic_roughness, g_uv).g, 0.0, 1.0);
     float spec = m.specular.a * texture(t_specular, g_uv).a;
     vec3 f0 = min(vec3(0.04) * m.specular.rgb * texture(t_specular_color, g_uv).rgb, vec3(1.0)) * spec;
-    vec3 albedo = voxel_albedo(base.rgb, metallic, roughness, f0, spec);
+    float glossy;
+    vec3 albedo = voxel_albedo(base.rgb, metallic, roughness, f0, spec, glossy);
     uvec3 a = uvec3(round(clamp(albedo, 0.0, 1.0) * FIXED_ONE));
+    uint ag = uint(round(clamp(glossy, 0.0, 1.0) * FIXED_ONE));
     uvec3 n2 = uvec3(round(normal * normal * FIXED_ONE));
     // Emission weighted by coverage, and the emitters' coverage summed beside it: a voxel's
     // emission is the coverage-weighted mean of its emitters', diluted where they cover less
@@ -213,6 +221,7 @@ void main() {
             atomicAdd(spread_accum.w[q], n2.x);
             atomicAdd(spread_accum.w[q + 1u], n2.y);
             atomicAdd(spread_accum.w[q + 2u], n2.z);
+            atomicAdd(spread_accum.w[q + 3u], ag);
             if ((frame.grid_info.w & FLAG_EMISSIVE) != 0u) {
                 uint j = voxel_index(c) * EMISSION_STRIDE;
                 atomicAdd(emission_accum.w[j], e.r);

@@ -210,9 +210,12 @@ fn blocks_share_a_specular_cone_only_where_it_matches_the_pixels() {
         // Since the voxels hold a rough lobe's light (voxelize.frag's voxel_albedo) the metal
         // floor and column are lit in the voxels, where they were black, and the reflections
         // the blocks share carry that light: 0.35 relMSE 2.4e-3, 3.7% off; 0.6 2.5e-3 (7.3e-4
-        // when the metals' voxels were black), 2.5%.
+        // when the metals' voxels were black), 2.5%. Since their mirror lobes' light is in
+        // the directional volumes too (the column's and the floor's, roughness 0.35 keeping
+        // 65% of it there), 0.35: 3.6e-3, 4.0% off; sharing regardless of the reflection's
+        // direction: 1.0e-2.
         let (max_e, max_off) = if roughness < 0.5 {
-            (3.5e-3, 0.05)
+            (4.5e-3, 0.05)
         } else {
             (3e-3, 0.035)
         };

@@ -553,13 +553,14 @@ fn hemispherical_albedo(brdf: &voxgi::reference::brdf::Brdf) -> Vec3 {
 }
 
 #[test]
-fn voxels_reflect_the_diffuse_albedo_and_the_wide_specular_lobes() {
+fn voxels_reflect_what_the_brdf_reflects_and_mark_their_mirror_lobes() {
     // Horizontal quads of base colour 0.8, each in its own layer of voxels (32^3 with a voxel
     // of padding: origin -1/30, voxels of 1/30, so y = 0.25 is the middle of layer 8).
     let base = 0.8;
-    // (metallic, roughness, specularFactor, expected voxel albedo, how close): below
-    // roughness 0.15 the diffuse albedo only (a smooth lobe is no Lambertian surface); from
-    // 0.65 up all the light the BRDF reflects, as the path tracer's BRDF integrates it.
+    // (metallic, roughness, specularFactor, expected voxel albedo, how close, expected glossy
+    // share): all the light the BRDF reflects, as the path tracer's BRDF integrates it; of it,
+    // the specular lobe's part is glossy (shown to wide cones only) below roughness 0.15, none
+    // of it from 0.65 up.
     let brdf = |base: f32, metallic: f32, roughness: f32| {
         let b = voxgi::reference::brdf::Brdf::new(
             Vec3::splat(base),
@@ -573,20 +574,29 @@ fn voxels_reflect_the_diffuse_albedo_and_the_wide_specular_lobes() {
     // A dielectric's specular layer does not depend on its base colour: what the base colour
     // adds is its diffuse albedo.
     let diffuse = brdf(base, 0.0, 0.05) - brdf(0.0, 0.0, 0.05);
+    // A lobe this narrow is a mirror's, too narrow for the grid of directions above: its albedo
+    // is Schlick's Fresnel term averaged over the cosine-weighted view, F0 + (1 - F0) / 21.
+    let mirror = |f0: f32| f0 + (1.0 - f0) / 21.0;
+    let smooth = |metallic: f32| {
+        let lobe = mirror(0.04) * (1.0 - metallic) + mirror(base) * metallic;
+        let all = (1.0 - metallic) * diffuse + lobe;
+        (all, lobe / all)
+    };
+    let (metal, half, dielectric) = (smooth(1.0), smooth(0.5), smooth(0.0));
     let cases = [
-        (1.0, 0.05, 1.0, 0.0, 1e-3),
-        (0.5, 0.05, 1.0, 0.5 * diffuse, 3e-3),
-        (0.0, 0.05, 1.0, diffuse, 3e-3),
-        (0.0, 0.05, 0.0, base, 1e-3),
-        (1.0, 1.0, 1.0, brdf(base, 1.0, 1.0), 0.02),
-        (1.0, 0.7, 1.0, brdf(base, 1.0, 0.7), 0.02),
-        (0.0, 0.8, 1.0, brdf(base, 0.0, 0.8), 0.02),
+        (1.0, 0.05, 1.0, metal.0, 0.02, metal.1),
+        (0.5, 0.05, 1.0, half.0, 0.02, half.1),
+        (0.0, 0.05, 1.0, dielectric.0, 0.01, dielectric.1),
+        (0.0, 0.05, 0.0, base, 1e-3, 0.0),
+        (1.0, 1.0, 1.0, brdf(base, 1.0, 1.0), 0.02, 0.0),
+        (1.0, 0.7, 1.0, brdf(base, 1.0, 0.7), 0.02, 0.0),
+        (0.0, 0.8, 1.0, brdf(base, 0.0, 0.8), 0.02, 0.0),
     ];
     let heights = [0.15f32, 0.25, 0.35, 0.45, 0.55, 0.65, 0.75];
     let mut s = empty_scene();
     let anchor_m = lambert(&mut s, Vec3::splat(0.5));
     anchor(&mut s, anchor_m);
-    for (&(metallic, roughness, specular, _, _), &y) in cases.iter().zip(&heights) {
+    for (&(metallic, roughness, specular, _, _, _), &y) in cases.iter().zip(&heights) {
         s.materials.push(Material {
             base_color: Vec3::splat(base).extend(1.0),
             metallic,
@@ -599,12 +609,14 @@ fn voxels_reflect_the_diffuse_albedo_and_the_wide_specular_lobes() {
     }
     for paper in [false, true] {
         let d = render_voxels(&s, voxel_settings(32, paper, Mode::VoxelsAlbedo));
-        for (&(metallic, roughness, specular, expected, tol), &y) in cases.iter().zip(&heights) {
+        for (&(metallic, roughness, specular, expected, tol, glossy), &y) in
+            cases.iter().zip(&heights)
+        {
             // --paper keeps the original's base colour, gamma-encoded (in RGBA8).
-            let (expected, tol) = if paper {
-                (base.powf(1.0 / 2.2), 1.0 / 255.0)
+            let (expected, tol, glossy) = if paper {
+                (base.powf(1.0 / 2.2), 1.0 / 255.0, 0.0)
             } else {
-                (expected, tol)
+                (expected, tol, glossy)
             };
             let layer = ((y + 1.0 / 30.0) * 30.0).floor() as u32;
             let mut checked = 0;
@@ -618,6 +630,12 @@ fn voxels_reflect_the_diffuse_albedo_and_the_wide_specular_lobes() {
                         (a - Vec3::splat(expected)).abs().max_element() <= tol,
                         "metallic {metallic}, roughness {roughness}, specularFactor {specular}, \
                          paper {paper}: voxel albedo {a}, expected {expected}"
+                    );
+                    assert!(
+                        (d.glossy[i] - glossy).abs() <= 0.03,
+                        "metallic {metallic}, roughness {roughness}, specularFactor {specular}, \
+                         paper {paper}: glossy share {}, expected {glossy}",
+                        d.glossy[i]
                     );
                     checked += 1;
                 }

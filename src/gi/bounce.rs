@@ -219,6 +219,9 @@ impl Bounce {
                         .with(volumes.back_radiance.as_ref(), |t, b| {
                             t.image("back_radiance", b, Usage::ReadWrite)
                         })
+                        .with(volumes.glossy_radiance.as_ref(), |t, g| {
+                            t.image("glossy_radiance", g, Usage::ReadWrite)
+                        })
                 };
                 let pass = Pass::new(
                     ctx,

@@ -64,6 +64,9 @@ impl Inject {
             })
             .with(volumes.back_radiance.as_ref(), |t, b| {
                 t.image("back_radiance", b, Usage::Write)
+            })
+            .with(volumes.glossy_radiance.as_ref(), |t, g| {
+                t.image("glossy_radiance", g, Usage::Write)
             });
         let shader = variant("inject_radiance.comp", paper);
         Ok(Inject {

@@ -33,6 +33,9 @@ impl Mip {
             .with(volumes.back_radiance.as_ref(), |t, b| {
                 t.image("back_radiance", b, Usage::Read)
             })
+            .with(volumes.glossy_radiance.as_ref(), |t, g| {
+                t.image("glossy_radiance", g, Usage::Read)
+            })
             .with(volumes.light_dir.as_ref(), |t, d| {
                 t.image_view("light_dir", d, d.level_view(0), Usage::Write)
             })

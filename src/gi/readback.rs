@@ -1,7 +1,7 @@
 //! Debug readback of the volumes: what voxelization and injection wrote, decoded on the CPU the
 //! way the shaders decode it (glsl/voxel_data.glsl), for tests and numerical checks.
 
-use super::volumes::{VoxelData, ALBEDO_STRIDE, EMISSION_STRIDE, NORMAL_STRIDE};
+use super::volumes::{VoxelData, ALBEDO_STRIDE, EMISSION_STRIDE, NORMAL_STRIDE, SPREAD_STRIDE};
 use super::Gi;
 use crate::vk::{vk, Access, Buffer, Context, Graph, Image, ResourceStates, VkResult};
 use glam::{Vec3, Vec4};
@@ -15,10 +15,15 @@ pub struct VoxelDump {
     /// Fragments averaged into each voxel (default mode; the 8-bit count for --paper).
     pub count: Vec<u32>,
     pub albedo: Vec<Vec3>,
+    /// The share of the albedo's light that a mirror-like lobe sends one way (default mode;
+    /// glsl/voxel_data.glsl's `Voxel::glossy`): the lit voxels hold it in the glossy volume,
+    /// not in `radiance`.
+    pub glossy: Vec<f32>,
     /// The averaged normal (not normalized: its length is how much the normals agree).
     pub normal: Vec<Vec3>,
     pub emission: Vec<Vec3>,
-    /// Outgoing radiance and opacity, when the voxels are lit.
+    /// Outgoing radiance (the full-resolution volume's and the glossy lobes') and opacity, when
+    /// the voxels are lit.
     pub radiance: Option<Vec<Vec4>>,
     /// When the voxels are lit: every texel of every level of the directional volumes and of
     /// the volumes beside them (light direction and position; none for --paper, whose texels
@@ -46,6 +51,7 @@ impl VoxelDump {
             filled: vec![false; nv],
             count: vec![0; nv],
             albedo: vec![Vec3::ZERO; nv],
+            glossy: vec![0.0; nv],
             normal: vec![Vec3::ZERO; nv],
             emission: vec![Vec3::ZERO; nv],
             radiance: None,
@@ -134,6 +140,7 @@ enum Lit {
     Directional(usize),
     SmallEmission,
     BackRadiance,
+    GlossyRadiance,
 }
 
 /// One mip level of a lit volume, as the readbacks copy it.
@@ -195,6 +202,15 @@ impl Gi {
                 kind: Lit::BackRadiance,
             });
         }
+        if let Some(glossy) = &self.volumes.glossy_radiance {
+            levels.push(LitLevel {
+                img: glossy,
+                texel: 8,
+                level: 0,
+                side: n,
+                kind: Lit::GlossyRadiance,
+            });
+        }
         levels
     }
 
@@ -235,15 +251,16 @@ impl Gi {
                 static_sums,
                 dynamic_sums,
             } => {
-                // The squared normals are not decoded.
+                // Of the spread words only the glossy part is decoded, not the squared normals.
                 let passes = [
-                    (["sa", "sn", "se"], Some(static_sums)),
-                    (["da", "dn", "de"], dynamic_sums.as_deref()),
+                    (["sa", "sn", "ss", "se"], Some(static_sums)),
+                    (["da", "dn", "ds", "de"], dynamic_sums.as_deref()),
                 ];
-                for ([a, n, e], sums) in passes {
+                for ([a, n, s, e], sums) in passes {
                     let Some(sums) = sums else { continue };
                     sources.push((a.into(), Src::Buf(&sums.albedo)));
                     sources.push((n.into(), Src::Buf(&sums.normal)));
+                    sources.push((s.into(), Src::Buf(&sums.spread)));
                     if let Some(b) = &sums.emission {
                         sources.push((e.into(), Src::Buf(b)));
                     }
@@ -268,6 +285,7 @@ impl Gi {
                 }
                 Lit::SmallEmission => "small".to_string(),
                 Lit::BackRadiance => "back".to_string(),
+                Lit::GlossyRadiance => "glossy".to_string(),
             };
             sources.push((name, Src::Img(l.img, l.texel, l.level, l.side)));
         }
@@ -286,13 +304,15 @@ impl Gi {
         let (sa, sn) = (words(sa), words(sn));
         let da = parts.get("da").map(|b| words(b));
         let dn = parts.get("dn").map(|b| words(b));
+        let ss = parts.get("ss").map(|b| words(b));
+        let ds = parts.get("ds").map(|b| words(b));
         let se = parts.get("se").map(|b| words(b));
         let de = parts.get("de").map(|b| words(b));
         let (sa_stride, sn_stride) = (ALBEDO_STRIDE as usize, NORMAL_STRIDE as usize);
         let es = EMISSION_STRIDE as usize;
         for v in 0..dump.filled.len() {
-            // The words in the order of glsl/voxel_common.glsl: count, albedo, normal,
-            // where the surfaces lie.
+            // The words in the order of glsl/voxel_common.glsl: count, albedo, normal, where
+            // the surfaces lie.
             let mut w: Vec<u32> = sa[v * sa_stride..(v + 1) * sa_stride]
                 .iter()
                 .chain(&sn[v * sn_stride..(v + 1) * sn_stride])
@@ -313,7 +333,16 @@ impl Gi {
                 continue;
             }
             let inv = 1.0 / (count as f32 * 4096.0);
-            dump.albedo[v] = Vec3::new(w[1] as f32, w[2] as f32, w[3] as f32) * inv;
+            let albedo = Vec3::new(w[1] as f32, w[2] as f32, w[3] as f32) * inv;
+            dump.albedo[v] = albedo;
+            let reflected = albedo.dot(Vec3::new(0.2126, 0.7152, 0.0722));
+            // The glossy part's luminance: the last spread word.
+            let spread = SPREAD_STRIDE as usize;
+            let glossy = |s: &Option<Vec<u32>>| s.as_ref().map_or(0, |s| s[(v + 1) * spread - 1]);
+            let g = glossy(&ss).wrapping_add(glossy(&ds));
+            if reflected > 0.0 {
+                dump.glossy[v] = (g as f32 * inv / reflected).clamp(0.0, 1.0);
+            }
             dump.normal[v] =
                 Vec3::new(w[4] as i32 as f32, w[5] as i32 as f32, w[6] as i32 as f32) * inv;
             if let Some(se) = &se {
@@ -371,10 +400,16 @@ impl Gi {
             } else {
                 halves(r)
             };
+            // The light of mirror-like lobes lies in a volume of its own (Volumes::glossy_radiance).
+            let glossy = parts.get("glossy").map(|g| halves(g));
             dump.radiance = Some(
                 texels
                     .into_iter()
-                    .map(|t| (t.truncate() / k).extend(t.w))
+                    .enumerate()
+                    .map(|(i, t)| {
+                        let g = glossy.as_ref().map_or(Vec4::ZERO, |g| g[i]);
+                        ((t + g).truncate() / k).extend(t.w)
+                    })
                     .collect(),
             );
         }
@@ -509,11 +544,17 @@ pub struct NonFinite {
     pub small_emission: usize,
     /// Voxels of the backs' radiance volume.
     pub back_radiance: usize,
+    /// Voxels of the glossy lobes' radiance volume.
+    pub glossy_radiance: usize,
 }
 
 impl NonFinite {
     pub fn total(&self) -> usize {
-        self.radiance + self.directional + self.small_emission + self.back_radiance
+        self.radiance
+            + self.directional
+            + self.small_emission
+            + self.back_radiance
+            + self.glossy_radiance
     }
 }
 
@@ -558,6 +599,7 @@ impl Gi {
                 Lit::Directional(_) => found.directional += bad,
                 Lit::SmallEmission => found.small_emission += bad,
                 Lit::BackRadiance => found.back_radiance += bad,
+                Lit::GlossyRadiance => found.glossy_radiance += bad,
             }
         }
         states.forget(host.raw);

@@ -10,10 +10,11 @@ use std::sync::Arc;
 
 /// uints per voxel of the default accumulators (glsl/voxel_common.glsl), in three buffers so
 /// that each stays within a 2 GiB allocation at 512^3: the count and albedo sums, the normal
-/// sums and where the surfaces cross the voxel, and the squared normals (spread).
+/// sums and where the surfaces cross the voxel, and the squared normals (spread) with the
+/// luminance of the albedo's glossy part.
 pub const ALBEDO_STRIDE: u64 = 4;
 pub const NORMAL_STRIDE: u64 = 4;
-pub const SPREAD_STRIDE: u64 = 3;
+pub const SPREAD_STRIDE: u64 = 4;
 /// Emission sums: RGB weighted by coverage, then the emitting surfaces' coverage (fixed point,
 /// voxelize.frag).
 pub const EMISSION_STRIDE: u64 = 4;
@@ -24,7 +25,8 @@ pub struct Sums {
     pub albedo: Buffer,
     /// Normal, then where the surfaces cross the voxel (NORMAL_STRIDE words a voxel).
     pub normal: Buffer,
-    /// Squared normal (SPREAD_STRIDE words a voxel).
+    /// Squared normal, then the luminance of the albedo's glossy part (SPREAD_STRIDE words a
+    /// voxel).
     pub spread: Buffer,
     /// When the scene emits (EMISSION_STRIDE words a voxel).
     pub emission: Option<Buffer>,
@@ -185,6 +187,11 @@ pub struct Volumes {
     /// `GiSettings::backs`, glsl/voxel_data.glsl's `open_back`). One texel, never read,
     /// without it; None for --paper.
     pub back_radiance: Option<Image>,
+    /// The light of mirror-like specular lobes (RGBA16F, as the radiance volume's, without
+    /// opacity): a voxel's glossy share of its light (glsl/voxel_data.glsl's `Voxel::glossy`),
+    /// which goes one way and so is left out of the full-resolution volume that narrow cones
+    /// read; the directional volumes hold it (glsl/aniso_mip_base.comp). None for --paper.
+    pub glossy_radiance: Option<Image>,
     /// The six directional volumes (-X, +X, -Y, +Y, -Z, +Z) with full mip chains.
     pub faces: Vec<Image>,
     /// Beside the directional volumes, texel for texel: where their light goes (xyz, the
@@ -271,6 +278,8 @@ impl Volumes {
             Optional::small_emission().make(ctx, n, settings, emissive, &mut info)?;
         let back_radiance =
             Optional::back_radiance().make(ctx, n, settings, settings.backs, &mut info)?;
+        let glossy_radiance =
+            Optional::glossy_radiance().make(ctx, n, settings, true, &mut info)?;
         let (faces, face_bytes) = directional_volumes(ctx, grid, texels, &mut info)?;
         let light_dir = beside_directional(
             ctx,
@@ -304,6 +313,7 @@ impl Volumes {
             emit_dir,
             small_emission,
             back_radiance,
+            glossy_radiance,
             faces,
             light_dir,
             light_pos,
@@ -416,6 +426,17 @@ impl Optional {
         Optional {
             name: "voxel radiance of open backs",
             label: "voxel radiance of open backs (RGBA16F)",
+            format: vk::Format::R16G16B16A16_SFLOAT,
+            texel_bytes: 8,
+            usage: volume_usage(),
+        }
+    }
+
+    /// The mirror-like lobes' light (always, but for --paper).
+    fn glossy_radiance() -> Optional {
+        Optional {
+            name: "voxel radiance of glossy lobes",
+            label: "voxel radiance of glossy lobes (RGBA16F)",
             format: vk::Format::R16G16B16A16_SFLOAT,
             texel_bytes: 8,
             usage: volume_usage(),
@@ -743,7 +764,10 @@ fn voxel_data(
                     ALBEDO_STRIDE,
                 )?,
                 normal: buffer(&format!("{pass} voxel normal sums"), NORMAL_STRIDE)?,
-                spread: buffer(&format!("{pass} voxel squared normal sums"), SPREAD_STRIDE)?,
+                spread: buffer(
+                    &format!("{pass} voxel squared normal and glossy sums"),
+                    SPREAD_STRIDE,
+                )?,
                 emission: emissive
                     .then(|| buffer(&format!("{pass} emission sums"), EMISSION_STRIDE))
                     .transpose()?,

@@ -272,6 +272,7 @@ impl Env {
                 ("directional volume texels", bad.directional),
                 ("small emitters' voxels", bad.small_emission),
                 ("backs' voxels", bad.back_radiance),
+                ("glossy lobes' voxels", bad.glossy_radiance),
             ] {
                 if count > 0 {
                     self.non_finite
