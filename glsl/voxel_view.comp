@@ -1,9 +1,9 @@
 #version 450
 // variants: PAPER
 // Debug views of the volumes: each pixel's camera ray walks the voxels (Amanatides and Woo)
-// and shows the first non-empty one: albedo, normal (n * 0.5 + 0.5), emission, radiance (from
-// behind its surface, its back's where it holds one), or the directional volumes at mip level
-// frame.trace.w, seen along the ray.
+// and shows the first non-empty one: albedo, normal (n * 0.5 + 0.5), emission, radiance (its
+// mirror-like lobes' too; from behind its surface, its back's where it holds one), or the
+// directional volumes at mip level frame.trace.w, seen along the ray.
 #include "common.glsl"
 #include "voxel_common.glsl"
 #define VOXEL_SET 1
@@ -14,6 +14,11 @@
 
 layout(local_size_x = 8, local_size_y = 8) in;
 layout(set = 1, binding = 5, rgba32f) uniform writeonly image2D view_out;
+#ifndef PAPER
+// The light of mirror-like lobes, which the full-resolution volume leaves out for the cones
+// (inject_radiance.comp): the view shows a voxel's whole light.
+layout(set = 1, binding = 6) uniform sampler3D glossy_radiance_tex;
+#endif
 
 layout(push_constant) uniform Pass {
     uint mode;   // 0 albedo, 1 normal, 2 emission, 3 radiance, 4 directional volumes
@@ -55,6 +60,7 @@ void main() {
             } else if (pass.mode == 3u) {
                 vec4 s = texelFetch(radiance_tex, c, 0);
 #ifndef PAPER
+                s.rgb += texelFetch(glossy_radiance_tex, c, 0).rgb;
                 // Seen from behind its surface, a voxel that holds its back's light shows it.
                 if (s.a > 0.0 && dot(texelFetch(emit_dir_tex, c, 0).xyz, dir) > 0.0
                     && open_back(c, load_voxel(c))) {

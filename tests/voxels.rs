@@ -877,3 +877,45 @@ fn a_thin_wall_covers_its_texels_at_its_plane() {
     let d = render_voxels(&s, one);
     assert_eq!(d.directional.expect("read back").len(), 8 * per_volume);
 }
+
+/// The voxels-radiance view shows a voxel's whole light, its mirror-like lobe's too, which the
+/// full-resolution volume leaves out for the narrow cones: a smooth metal floor under a sun,
+/// seen from above, shows the light its voxels hold (before, black).
+#[test]
+fn the_radiance_view_shows_a_mirrors_light() {
+    let mut s = empty_scene();
+    s.materials.push(Material {
+        base_color: Vec3::splat(0.9).extend(1.0),
+        metallic: 1.0,
+        roughness: 0.05,
+        specular_factor: 1.0,
+        ..Material::default()
+    });
+    floor(&mut s, 2.0, 0);
+    top_camera(&mut s, 3.0, 40.0);
+    s.lights.push(light(
+        voxgi::scene::LightKind::Directional,
+        Vec3::splat(3.0),
+        Vec3::ZERO,
+        Vec3::new(0.2, -1.0, 0.1),
+    ));
+    let settings = voxel_settings(32, false, Mode::VoxelsRadiance);
+    let d = render_voxels(&s, settings.clone());
+    let radiance = d.radiance.as_ref().unwrap();
+    let floor: Vec<usize> = (0..d.filled.len())
+        .filter(|&i| d.filled[i] && d.normal[i].y > 0.99)
+        .collect();
+    assert!(!floor.is_empty());
+    assert!(
+        floor.iter().all(|&i| d.glossy[i] > 0.95),
+        "a mirror's voxels"
+    );
+    let held = floor.iter().map(|&i| radiance[i].x).sum::<f32>() / floor.len() as f32;
+    assert!(held > 0.1, "the floor's voxels hold {held}");
+    let img = render(&s, settings);
+    let shown = img.at(8, 8)[0];
+    assert!(
+        (shown - held).abs() < 0.05 * held,
+        "the view shows {shown}, the voxels hold {held}"
+    );
+}

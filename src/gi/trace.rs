@@ -272,7 +272,11 @@ const TRACE_PUSH_SIZE: u32 = 8;
 
 /// The voxel views' table: the voxels, the volumes and the image they write.
 fn view_table(volumes: &Volumes, out: &Image) -> Bindings {
-    let table = read_voxel_data(Bindings::new(), volumes).image("view_out", out, Usage::Write);
+    let table = read_voxel_data(Bindings::new(), volumes)
+        .image("view_out", out, Usage::Write)
+        .with(volumes.glossy_radiance.as_ref(), |t, g| {
+            t.sampled("glossy_radiance_tex", g, &volumes.sampler)
+        });
     cone_volumes(table, volumes, true)
 }
 
