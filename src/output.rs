@@ -14,6 +14,11 @@ pub enum OutputError {
     Read { path: PathBuf, reason: String },
 }
 
+/// Rec. 709 luminance of linear RGB (glsl/common.glsl's `luminance`).
+pub fn luminance(c: glam::Vec3) -> f32 {
+    c.dot(glam::Vec3::new(0.2126, 0.7152, 0.0722))
+}
+
 /// A linear-radiance image, row 0 at the top.
 #[derive(Clone, Debug)]
 pub struct RadianceImage {

@@ -335,7 +335,7 @@ impl Gi {
             let inv = 1.0 / (count as f32 * 4096.0);
             let albedo = Vec3::new(w[1] as f32, w[2] as f32, w[3] as f32) * inv;
             dump.albedo[v] = albedo;
-            let reflected = albedo.dot(Vec3::new(0.2126, 0.7152, 0.0722));
+            let reflected = crate::output::luminance(albedo);
             // The glossy part's luminance: the last spread word.
             let spread = SPREAD_STRIDE as usize;
             let glossy = |s: &Option<Vec<u32>>| s.as_ref().map_or(0, |s| s[(v + 1) * spread - 1]);

@@ -13,6 +13,7 @@
 //! a point sees as the disc of the same solid angle. Any other mesh with more edges stays in
 //! the voxels.
 
+use crate::output::luminance;
 use crate::scene::{AlphaMode, Material, Scene};
 use glam::{Mat4, Vec3};
 use std::collections::HashMap;
@@ -200,10 +201,6 @@ fn newell_normal(v: &[Vec3]) -> Option<Vec3> {
     }
     let l = n.length();
     (l > 0.0 && l.is_finite()).then(|| n / l)
-}
-
-fn luminance(c: Vec3) -> f32 {
-    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
 }
 
 /// Le of a material: the factor times its emissive texture's mean (in linear light), which is

@@ -2,6 +2,7 @@
 //! chain (a 1x1 image for a uniform radiance, a black one without an environment), sampled
 //! by cones at the level of their aperture, and the frame uniform that turns and scales it.
 
+use crate::output::luminance;
 use crate::scene::environment::{equirect_direction, EnvImage};
 use crate::scene::{EnvSource, Environment, Light, LightKind};
 use crate::vk::{vk, Context, Image, ImageDesc, Sampler, VkResult};
@@ -134,7 +135,6 @@ pub fn split_sun(env: &Environment) -> Option<SunSplit> {
         return None;
     };
     let (w, h) = (img.width as usize, img.height as usize);
-    let lum = |t: Vec3| 0.2126 * t.x + 0.7152 * t.y + 0.0722 * t.z;
     let solid = |y: usize| {
         let v = (y as f32 + 0.5) / h as f32;
         (2.0 * PI / w as f32) * (PI / h as f32) * (v * PI).sin()
@@ -143,7 +143,7 @@ pub fn split_sun(env: &Environment) -> Option<SunSplit> {
     let mut brightest = (0usize, 0.0f32);
     for y in 0..h {
         for x in 0..w {
-            let l = lum(img.texels[y * w + x]);
+            let l = luminance(img.texels[y * w + x]);
             total += (l * solid(y)) as f64;
             area += solid(y) as f64;
             if l > brightest.1 {
@@ -171,7 +171,7 @@ pub fn split_sun(env: &Environment) -> Option<SunSplit> {
         }
         for (x, y) in neighbours(i % w, i / w, w, h) {
             let j = y * w + x;
-            if !inside[j] && lum(img.texels[j]) > threshold {
+            if !inside[j] && luminance(img.texels[j]) > threshold {
                 inside[j] = true;
                 stack.push(j);
             }
@@ -199,7 +199,7 @@ pub fn split_sun(env: &Environment) -> Option<SunSplit> {
         let excess = (img.texels[i] - fill).max(Vec3::ZERO);
         let d = equirect_direction((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
         irradiance += excess * solid(y);
-        towards += d * lum(excess) * solid(y);
+        towards += d * luminance(excess) * solid(y);
         texels[i] = img.texels[i].min(fill);
     }
     let towards = env.to_world(towards.normalize_or_zero());
