@@ -1,8 +1,12 @@
 #version 450
+// variants: AREA_FACES
 // Deferred direct lighting: punctual lights with filtered shadow maps, emissive surfaces as area
 // lights (area_lights.glsl) with shadows softened by their size, plus emission, written as
 // linear radiance (RGBA32F). Where no cone traces the environment (--mode direct), its light
 // too, unoccluded, as a glTF viewer's image-based lighting: the cones take it otherwise.
+// AREA_FACES (area lights and the default's voxels): the pixels whose area-light blockers lie
+// within the light's own reach are listed for area_faces.comp, which adds what the light's
+// faces show them past what it rests on.
 #include "common.glsl"
 #include "brdf.glsl"
 #include "lights.glsl"
@@ -21,6 +25,27 @@ layout(set = 1, binding = 6, rgba32f) uniform writeonly image2D out_radiance;
 // for the blocker search.
 layout(set = 1, binding = 7) uniform sampler2DArrayShadow area_shadow_map;
 layout(set = 1, binding = 8) uniform sampler2DArray area_shadow_depth;
+
+#ifdef AREA_FACES
+#include "area_faces.glsl"
+layout(set = 1, binding = 9, std430) buffer FacesList {
+    uint dispatch_x, dispatch_y, dispatch_z;
+    uint count;
+    uint pixels[];  // x | y << 16
+};
+
+// Appends px to the list, growing the dispatch by a group every 64 pixels.
+void list_pixel(ivec2 px) {
+    uint i = atomicAdd(count, 1u);
+    if (i >= uint(pixels.length())) return;
+    pixels[i] = uint(px.x) | (uint(px.y) << 16);
+    if (i % 64u == 0u) {
+        uint groups = i / 64u + 1u;
+        atomicMax(dispatch_x, min(groups, FACES_ROW));
+        atomicMax(dispatch_y, (groups + FACES_ROW - 1u) / FACES_ROW);
+    }
+}
+#endif
 
 void main() {
     ivec2 px = ivec2(gl_GlobalInvocationID.xy);
@@ -52,12 +77,16 @@ void main() {
 
     vec3 radiance = emission.rgb;
     AreaLobes lobes = area_lobes(s, n, v);
+    bool listed = false;
     for (uint i = 0u; i < frame.counts.x; i++) {
         Light light = lights[i];
         if (uint(light.position_type.w) == LIGHT_AREA) {
             vec3 e = area_light_radiance(light, lobes, p);
             if (all(equal(e, vec3(0.0)))) continue;
-            radiance += e * area_shadow(light, p, geo, area_shadow_map, area_shadow_depth);
+            float blocker;
+            float vis = area_shadow(light, p, geo, area_shadow_map, area_shadow_depth, blocker);
+            radiance += e * vis;
+            listed = listed || hidden_by_support(light, vis, blocker);
             continue;
         }
         vec3 l;
@@ -68,6 +97,9 @@ void main() {
         float vis = shadow_visibility(light, p, geo, shadow_map, area_shadow_map);
         radiance += brdf(s, n, v, l) * e * n_dot_l * vis;
     }
+#ifdef AREA_FACES
+    if (listed) list_pixel(px);
+#endif
     if (environment_lights_directly()) {
         vec3 diffuse_weight;
         vec3 spec_reflectance;

@@ -151,13 +151,34 @@ vec2 receiver_slope(mat4 view_proj, vec3 q, vec3 n, float texel, vec2 uv, float 
     return vec2(du2.y * dz.x - du1.y * dz.y, du1.x * dz.y - du2.x * dz.x) / det;
 }
 
+// Whether the area light's shadow views find something touching `q`, a point on the light's
+// surface: a surface within a fiftieth of the light's reach and two texels of q's depth (what
+// the light rests on, covering that part of it; not what lies inside the light or beyond).
+bool light_rests_on(Light light, vec3 q, sampler2DArray shadow_depth) {
+    uint count = uint(light.cone.w);
+    if (count == 0u) return false;
+    vec3 rel = q - light.position_type.xyz;
+    uint view = uint(light.cone.z) + cube_face(rel);
+    ShadowView sv = shadow_views[view];
+    float at = max(max(abs(rel.x), abs(rel.y)), abs(rel.z));
+    vec2 uv;
+    float depth;
+    if (!shadow_coords(sv, q, uv, depth)) return false;
+    float d = textureLod(shadow_depth, vec3(uv, float(view) - frame.area_shadow.y), 0.0).r;
+    float near = sv.info.z, far = sv.info.w;
+    float found = near * far / (far - d * (far - near));
+    return abs(found - at) < 0.02 * light.direction_range.w + 2.0 * sv.info.y * at;
+}
+
 // Visibility of an area light from p (0 to 1), by percentage-closer soft shadows in the cube
 // of views at its centre: the blockers' mean depth over the part of the view the light's
 // size could be hidden by gives the penumbra's width at p by similar triangles, radius x
 // (receiver - blocker) / blocker, and the comparisons are filtered over that width. Contact
-// shadows stay sharp, far ones widen with the light.
+// shadows stay sharp, far ones widen with the light. `blocker`: the blockers' mean distance
+// from the centre along the view's axis (0 where none were found).
 float area_shadow(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow shadow_map,
-                  sampler2DArray shadow_depth) {
+                  sampler2DArray shadow_depth, out float blocker) {
+    blocker = 0.0;
     uint count = uint(light.cone.w);
     if (count == 0u) return 1.0;
     vec3 rel = p - light.position_type.xyz;
@@ -194,7 +215,7 @@ float area_shadow(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow shadow_m
         }
     }
     if (found == 0.0) return 1.0;
-    float blocker = blockers / found;
+    blocker = blockers / found;
     float penumbra = radius * max(receiver - blocker, 0.0) / max(blocker, near) / texel;
     penumbra = clamp(penumbra, max(frame.shadow.z, 0.5), widest);
 
@@ -205,6 +226,14 @@ float area_shadow(Light light, vec3 p, vec3 geo_n, sampler2DArrayShadow shadow_m
         sum += texture(shadow_map, vec4(uv + o, layer, depth + dot(slope, o) - bias));
     }
     return sum / 32.0;
+}
+
+// Whether the cube of shadow views at an area light's centre may hide from a pixel what the
+// light's faces see: the blockers its PCSS search found (their mean distance from the centre,
+// 0 where none) lie within the light's reach (direction_range.w: its farthest point from the
+// centre), which makes them what the light rests on (a cube on a pedestal of its footprint).
+bool hidden_by_support(Light light, float vis, float blocker) {
+    return vis < 1.0 && blocker > 0.0 && blocker < light.direction_range.w;
 }
 
 #endif

@@ -441,7 +441,7 @@ pub const FIELDS: &[Field] = &[
 ];
 
 /// Empties a list that drives an indirect dispatch (the bounce's filled voxels, the trace's
-/// unmatched pixels): its header, dispatch (0, 1, 1) and count 0.
+/// unmatched pixels, the lighting's pixels for the area lights' faces): its header, dispatch (0, 1, 1) and count 0.
 pub(crate) fn record_list_clear(ctx: &Context, g: &mut Graph, list: &Buffer, name: &str) {
     g.pass(name)
         .buffer(list, Access::TransferWrite)

@@ -9,7 +9,7 @@ use super::gbuffer::GBufferPass;
 use super::gpu::FrameUniforms;
 use super::gpu_scene::{light_table, GpuScene, ShadowResolution};
 use super::instances::{self, Instances, SceneDraw, DRAW_PUSH_SIZE, NORMAL, POSITION, UV};
-use super::lighting::LightingPass;
+use super::lighting::{LightingInputs, LightingPass};
 use super::scene_set::SceneBindings;
 use super::shadow_maps::{ShadowLayout, ShadowMaps};
 use crate::gi::{
@@ -111,6 +111,9 @@ pub enum Step {
     GBuffer,
     /// Direct light per pixel from the G-buffer and the shadow maps.
     Lighting,
+    /// With area lights and the default's voxels: the light of an emitter's faces at the
+    /// pixels whose shadow views may hide them behind what it rests on (lighting.rs).
+    AreaFaces,
     /// The diffuse cones per block of pixels or over frames (with a trace scale above 1 or a
     /// temporal trace), for the trace to upsample.
     Gather,
@@ -134,6 +137,7 @@ impl Step {
             Step::Voxels(s) => s.name(),
             Step::GBuffer => "gbuffer".into(),
             Step::Lighting => "lighting".into(),
+            Step::AreaFaces => "area faces".into(),
             Step::Gather => "gather".into(),
             Step::Trace => "trace".into(),
             Step::TraceUnmatched => "trace unmatched".into(),
@@ -346,7 +350,6 @@ impl Renderer {
             },
         )?;
         let gbuffer = GBufferPass::new(ctx, &sets)?;
-        let lighting = LightingPass::new(ctx, &sets, &targets, &nearest, &shadows)?;
         let lit: Vec<(usize, f32)> = area_lights
             .iter()
             .map(|e| (e.instance, e.emission.max_element()))
@@ -384,6 +387,16 @@ impl Renderer {
         } else {
             None
         };
+        let lighting = LightingPass::new(
+            ctx,
+            &sets,
+            &LightingInputs {
+                targets: &targets,
+                nearest: &nearest,
+                shadow: &shadows,
+                voxels: faces_voxels(gi.as_ref(), area_lights.len()),
+            },
+        )?;
         let commands = CommandPool::new(ctx)?;
         let timer = if settings.timings {
             PassTimer::new(ctx, 64)?
@@ -707,6 +720,9 @@ impl Renderer {
         }
         if matches!(mode, Mode::Full | Mode::Direct) {
             steps.push(Step::Lighting);
+            if self.lighting.lists_faces() {
+                steps.push(Step::AreaFaces);
+            }
         }
         if let Some(gi) = &self.gi {
             if mode.shades_pixels() {
@@ -777,6 +793,10 @@ impl Renderer {
             Step::Lighting => {
                 let scene_set = self.sets.scene_set();
                 self.lighting.record(ctx, g, &name, targets, scene_set)
+            }
+            Step::AreaFaces => {
+                let scene_set = self.sets.scene_set();
+                self.lighting.record_faces(ctx, g, &name, scene_set)
             }
             Step::Gather => self.record_gather(g, &name),
             Step::Trace | Step::VoxelView => self.record_trace(g, &name),
@@ -973,9 +993,13 @@ impl Renderer {
         self.lighting.retarget(
             &self.ctx,
             &self.sets,
-            &targets,
-            &self.nearest,
-            &self.shadows,
+            &LightingInputs {
+                targets: &targets,
+                nearest: &self.nearest,
+                shadow: &self.shadows,
+                voxels: faces_voxels(self.gi.as_ref(), self.area_lights.len()),
+            },
+            &mut self.states,
         )?;
         if let Some(a) = &mut self.accumulate {
             a.retarget(&self.ctx, &targets)?;
@@ -1139,4 +1163,11 @@ impl Drop for Renderer {
             let _ = self.ctx.device.device_wait_idle();
         }
     }
+}
+
+/// The voxels the area lights' faces pass reads (lighting.rs): where there are area lights and
+/// the voxels are the default's (not --paper's RGBA8 averages).
+fn faces_voxels(gi: Option<&Gi>, area_lights: usize) -> Option<&crate::gi::Volumes> {
+    gi.filter(|g| area_lights > 0 && !g.settings.paper)
+        .map(|g| &g.volumes)
 }
