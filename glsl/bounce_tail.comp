@@ -3,8 +3,8 @@
 // what each listed voxel reflects; this adds it to the voxel's radiance. On the last bounce it
 // also adds the bounces after it as a geometric series, the ambient term of progressive
 // radiosity (Cohen, Chen, Wallace and Greenberg 1988): each further bounce returns lambda of the
-// one before, lambda being the voxels' mean albedo times the share of their hemisphere that is
-// closed (what the cones found), per channel. So the last bounce's light is scaled by
+// one before, lambda being the mean albedo of the voxels that gathered light times the share of
+// their hemisphere that is closed (what the cones found), per channel. So the last bounce's light is scaled by
 // 1 / (1 - lambda): in a closed box of albedo a every voxel sends out Le / (1 - a). Not for
 // --paper, whose second bounce is its last.
 #include "common.glsl"

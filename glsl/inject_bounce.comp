@@ -6,7 +6,7 @@
 // pixels') and albedo / pi; a two-sided voxel gathers both sides. What a voxel reflects is kept
 // aside for bounce_tail.comp, which adds it (on the last bounce with the bounces not traced),
 // and each voxel's albedo times the share of its hemisphere the cones found closed is summed
-// for it. One-sided voxels share their gather within blocks of BLOCK^3 voxels
+// for it over the voxels that gathered light. One-sided voxels share their gather within blocks of BLOCK^3 voxels
 // (FLAG_BOUNCE_SHARE): the SHARE dispatch, run first, one invocation a block, gathers from the
 // middle of the block's first one-sided voxel's plane where no surface rises in front of it,
 // and the voxels in that plane that face its way take that light (bounce light is smooth, and
@@ -309,7 +309,11 @@ void main() {
                     }
                 }
             }
-            mine = vec4(v.albedo * clamp(closed, 0.0, 1.0), 1.0);
+            // Only voxels that gathered light continue its series: the dark outer faces of a
+            // closed room's thick walls see the void (closed share 0) and would halve it.
+            float gathered_light = two_sided ? luminance(front_light.rgb + back_gather.rgb)
+                                             : luminance(front_light.rgb);
+            if (gathered_light > 0.0) mine = vec4(v.albedo * clamp(closed, 0.0, 1.0), 1.0);
         }
         bounce *= frame.tuning.y;
         back_light *= frame.tuning.y;
