@@ -10,6 +10,7 @@
 #include "brdf.glsl"
 #include "lights.glsl"
 #include "voxel_common.glsl"
+#define FACES_LIST_READONLY
 #include "area_faces.glsl"
 
 layout(local_size_x = 64) in;
@@ -22,11 +23,6 @@ layout(set = 1, binding = 4) uniform sampler2D gb_specular;
 layout(set = 1, binding = 6, rgba32f) uniform image2D out_radiance;
 layout(set = 1, binding = 7) uniform sampler2DArrayShadow area_shadow_map;
 layout(set = 1, binding = 8) uniform sampler2DArray area_shadow_depth;
-layout(set = 1, binding = 9, std430) readonly buffer FacesList {
-    uint dispatch_x, dispatch_y, dispatch_z;
-    uint count;
-    uint pixels[];  // x | y << 16
-};
 // The lit voxels (inject_radiance.comp): a filled voxel's opacity is 1, an empty one's 0.
 layout(set = 1, binding = 10, rgba16f) uniform readonly image3D radiance;
 bool voxel_filled(ivec3 c) { return imageLoad(radiance, c).a > 0.0; }

@@ -28,23 +28,6 @@ layout(set = 1, binding = 8) uniform sampler2DArray area_shadow_depth;
 
 #ifdef AREA_FACES
 #include "area_faces.glsl"
-layout(set = 1, binding = 9, std430) buffer FacesList {
-    uint dispatch_x, dispatch_y, dispatch_z;
-    uint count;
-    uint pixels[];  // x | y << 16
-};
-
-// Appends px to the list, growing the dispatch by a group every 64 pixels.
-void list_pixel(ivec2 px) {
-    uint i = atomicAdd(count, 1u);
-    if (i >= uint(pixels.length())) return;
-    pixels[i] = uint(px.x) | (uint(px.y) << 16);
-    if (i % 64u == 0u) {
-        uint groups = i / 64u + 1u;
-        atomicMax(dispatch_x, min(groups, FACES_ROW));
-        atomicMax(dispatch_y, (groups + FACES_ROW - 1u) / FACES_ROW);
-    }
-}
 #endif
 
 void main() {
