@@ -10,8 +10,10 @@
 #include "brdf.glsl"
 #include "lights.glsl"
 #include "voxel_common.glsl"
-#define FACES_LIST_READONLY
-#include "area_faces.glsl"
+#define PIXEL_LIST FacesList
+#define PIXEL_LIST_BINDING 9
+#define PIXEL_LIST_READONLY
+#include "pixel_list.glsl"
 
 layout(local_size_x = 64) in;
 
@@ -53,9 +55,8 @@ float area_seen(Light light, vec3 p, vec3 n) {
 }
 
 void main() {
-    uint i = (gl_WorkGroupID.y * FACES_ROW + gl_WorkGroupID.x) * 64u + gl_LocalInvocationID.x;
-    if (i >= min(count, uint(pixels.length()))) return;
-    ivec2 px = ivec2(pixels[i] & 0xffffu, pixels[i] >> 16);
+    ivec2 px;
+    if (!listed_pixel(px)) return;
     vec4 normals = texelFetch(gb_normals, px, 0);
     vec4 albedo = texelFetch(gb_albedo, px, 0);
     vec4 emission = texelFetch(gb_emission, px, 0);

@@ -43,19 +43,13 @@ layout(set = 1, binding = 7) uniform sampler2D gathered_specular;
 #endif
 
 #if defined(UPSAMPLED) || defined(UNMATCHED)
-// Groups per row of UNMATCHED's dispatch (maxComputeWorkGroupCount may be 65535 per axis).
-const uint ROW = 4096u;
-// The pixels no block holds, listed by UPSAMPLED for UNMATCHED (its indirect dispatch: groups
-// of 64 in rows of ROW).
+// The pixels no block holds, listed by UPSAMPLED for UNMATCHED.
+#define PIXEL_LIST Unmatched
+#define PIXEL_LIST_BINDING 8
 #ifdef UNMATCHED
-layout(set = 1, binding = 8, std430) readonly buffer Unmatched {
-#else
-layout(set = 1, binding = 8, std430) buffer Unmatched {
+#define PIXEL_LIST_READONLY
 #endif
-    uint dispatch_x, dispatch_y, dispatch_z;
-    uint count;
-    uint pixels[];  // x | y << 16
-};
+#include "pixel_list.glsl"
 #endif
 
 layout(push_constant) uniform Pass {
@@ -123,9 +117,8 @@ Upsampled upsample(ivec2 px, vec3 p, vec3 geo, vec3 refl, float tan_half) {
 // A listed pixel's diffuse cones, the whole set, added to what the trace left (it took no
 // diffuse light there); the ambient occlusion mode's value replaced.
 void main() {
-    uint i = (gl_WorkGroupID.y * ROW + gl_WorkGroupID.x) * 64u + gl_LocalInvocationID.x;
-    if (i >= min(count, uint(pixels.length()))) return;
-    ivec2 px = ivec2(pixels[i] & 0xffffu, pixels[i] >> 16);
+    ivec2 px;
+    if (!listed_pixel(px)) return;
     vec4 normals = texelFetch(gb_normals, px, 0);
     vec3 p = texelFetch(gb_position, px, 0).xyz;
     vec3 n = oct_decode(normals.xy);
@@ -191,15 +184,7 @@ void main() {
         g = up.diffuse;
         if (g.weight == 0.0) {
             // No block shows this surface: UNMATCHED adds its diffuse light.
-            uint i = atomicAdd(count, 1u);
-            if (i < uint(pixels.length())) {
-                pixels[i] = uint(px.x) | (uint(px.y) << 16);
-                if (i % 64u == 0u) {
-                    uint groups = i / 64u + 1u;
-                    atomicMax(dispatch_x, min(groups, ROW));
-                    atomicMax(dispatch_y, (groups + ROW - 1u) / ROW);
-                }
-            }
+            list_pixel(px);
         }
     }
 #else

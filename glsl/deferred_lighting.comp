@@ -27,7 +27,10 @@ layout(set = 1, binding = 7) uniform sampler2DArrayShadow area_shadow_map;
 layout(set = 1, binding = 8) uniform sampler2DArray area_shadow_depth;
 
 #ifdef AREA_FACES
-#include "area_faces.glsl"
+// The pixels for area_faces.comp (lights.glsl's hidden_by_support says which).
+#define PIXEL_LIST FacesList
+#define PIXEL_LIST_BINDING 9
+#include "pixel_list.glsl"
 #endif
 
 void main() {
