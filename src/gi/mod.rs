@@ -718,7 +718,7 @@ impl Gi {
         dynamic: bool,
         inputs: GiInputs,
     ) -> VkResult<Gi> {
-        let grid = VoxelGrid::fit(&scene.bounds, settings.voxels);
+        let grid = VoxelGrid::fit(&scene.voxel_bounds(), settings.voxels);
         // The emission the voxels hold: every emissive instance's but the lights'.
         let max_emission = scene
             .instances

@@ -329,6 +329,59 @@ pub struct Scene {
     pub warnings: Vec<String>,
 }
 
+/// A flat instance this many times wider than everything else is a ground: the voxel grid
+/// leaves out its far part.
+const GROUND_SPAN: f32 = 4.0;
+/// How far past everything else the grid then reaches, in its size: chosen on the corpus's
+/// tune split (0.5 against 1.0: openings' 90th percentile 0.113 against 0.130).
+const GROUND_MARGIN: f32 = 0.5;
+
+impl Scene {
+    /// What the voxel grid covers: the bounds, or where a ground plane reaches far past
+    /// everything else (a small building on a large ground), everything else widened by
+    /// GROUND_MARGIN of its size on each side. The grid spans its largest extent in 64 voxels
+    /// by default: a ground 10 times the building's gave voxels as wide as a room's walls are
+    /// apart. Beyond the grid the cones see the environment.
+    pub fn voxel_bounds(&self) -> Aabb {
+        if !self.animations.is_empty() {
+            return self.bounds;
+        }
+        let boxes: Vec<Aabb> = self
+            .instances
+            .iter()
+            .map(|i| self.instance_bounds(i))
+            .collect();
+        let flat = |b: &Aabb| b.extent().min_element() <= 1e-3 * b.extent().max_element();
+        let mut rest = Aabb::EMPTY;
+        for b in boxes.iter().filter(|b| !flat(b)) {
+            rest = rest.union(b);
+        }
+        let span = rest.extent().max_element();
+        let ground = boxes
+            .iter()
+            .any(|b| flat(b) && b.extent().max_element() > GROUND_SPAN * span);
+        if rest.is_empty() || !ground {
+            return self.bounds;
+        }
+        let pad = Vec3::splat(span * GROUND_MARGIN);
+        Aabb {
+            min: (rest.min - pad).max(self.bounds.min),
+            max: (rest.max + pad).min(self.bounds.max),
+        }
+    }
+
+    /// An instance's world bounds (its primitive's box, transformed).
+    fn instance_bounds(&self, inst: &Instance) -> Aabb {
+        let mut b = Aabb::EMPTY;
+        if let Some(p) = self.primitives.get(inst.primitive as usize) {
+            for c in p.bounds.corners() {
+                b.extend(inst.world.transform_point3(c));
+            }
+        }
+        b
+    }
+}
+
 impl Scene {
     /// Views the scene as `view` says.
     pub fn set_view(&mut self, view: &ViewSpec) -> Result<(), String> {
