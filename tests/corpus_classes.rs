@@ -121,9 +121,10 @@ fn an_emitter_on_a_table_leaves_the_floor_under_it_dark() {
 
 /// Small buildings on large grounds (scale-052: a room of 6.4 m on a ground of 86 m, 18 km
 /// from the origin; openings-018: a room of 7.4 m on a ground of 77 m): the grid leaves out the
-/// ground's far part, so the rooms get voxels of about 20 cm, not 1.2 to 1.4 m. Measured at 48x48 against
-/// 256 samples: relMSE 0.79 (mean 1.29; 0.094 and 0.99 at 64x64 against 1024) and 0.0135
-/// (mean 1.00); before (the grid over the whole ground), 2.34 (mean 2.86) and 0.148 (1.37).
+/// ground's far part, so the rooms get voxels of about 20 cm, not 1.2 to 1.4 m. Measured at
+/// 48x48 against 256 samples: relMSE 0.79 (mean 1.29; 0.094 and 0.99 at 64x64 against 1024)
+/// and 0.0135 (mean 1.00); before (the grid over the whole ground), 2.34 (mean 2.86) and 0.148
+/// (1.37).
 #[test]
 fn a_small_building_on_a_large_ground_gets_fine_voxels() {
     let cases = [(Class::Scale, 52, 1.2), (Class::Openings, 18, 0.03)];
