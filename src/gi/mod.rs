@@ -718,7 +718,14 @@ impl Gi {
         dynamic: bool,
         inputs: GiInputs,
     ) -> VkResult<Gi> {
-        let grid = VoxelGrid::fit(&scene.voxel_bounds(), settings.voxels);
+        // Nodes that move may go where a ground's far part was; the original's grid covers the
+        // whole scene.
+        let bounds = if dynamic || settings.paper {
+            scene.bounds
+        } else {
+            scene.voxel_bounds()
+        };
+        let grid = VoxelGrid::fit(&bounds, settings.voxels);
         // The emission the voxels hold: every emissive instance's but the lights'.
         let max_emission = scene
             .instances
