@@ -40,6 +40,56 @@ pub enum Shape {
     },
 }
 
+impl Shape {
+    /// Whether it encloses a volume: a sphere, or polygons whose every edge another polygon
+    /// runs the other way (a box). A closed emitter's faces hide their own backs, so a
+    /// double-sided one lights the world from its outside alone: summed from both sides, a
+    /// point outside it took the light of its silhouette twice, once through its near faces'
+    /// fronts and once through its far faces' backs.
+    pub fn closed(&self) -> bool {
+        let Shape::Polygons(polys) = self else {
+            return true;
+        };
+        let key = |v: Vec3| v.to_array().map(f32::to_bits);
+        let mut unpaired: HashMap<([u32; 3], [u32; 3]), i32> = HashMap::new();
+        for p in polys {
+            let n = p.vertices.len();
+            for k in 0..n {
+                let (a, b) = (key(p.vertices[k]), key(p.vertices[(k + 1) % n]));
+                // +1 for a to b, -1 for its twin b to a: a closed outline sums to 0 per edge.
+                let (lo, hi, sign) = if a < b { (a, b, 1) } else { (b, a, -1) };
+                *unpaired.entry((lo, hi)).or_insert(0) += sign;
+            }
+        }
+        !polys.is_empty() && unpaired.values().all(|&c| c == 0)
+    }
+
+    /// The same, its polygons turned to face out where they enclose a volume facing in (the
+    /// divergence theorem: the volume their fronts bound is negative).
+    fn facing_out(self) -> Shape {
+        let Shape::Polygons(polys) = &self else {
+            return self;
+        };
+        let o = polys[0].vertices[0];
+        let volume: f32 = polys
+            .iter()
+            .map(|p| p.area() * p.normal.dot(p.vertices[0] - o))
+            .sum();
+        if volume >= 0.0 {
+            return self;
+        }
+        Shape::Polygons(
+            polys
+                .iter()
+                .map(|p| Polygon {
+                    vertices: p.vertices.iter().rev().copied().collect(),
+                    normal: -p.normal,
+                })
+                .collect(),
+        )
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 pub struct Polygon {
     pub vertices: Vec<Vec3>,
@@ -256,10 +306,13 @@ pub fn find(scene: &Scene) -> Vec<AreaLight> {
         let Some(local) = shape_of(&triangles) else {
             continue;
         };
+        // A closed double-sided emitter lights the world from its outside alone.
+        let closed = m.double_sided && local.closed();
+        let local = if closed { local.facing_out() } else { local };
         let mut light = AreaLight {
             instance: i,
             emission: emission(scene, m),
-            two_sided: m.double_sided,
+            two_sided: m.double_sided && !closed,
             triangles: triangles.len(),
             shape: local.clone(),
             local,
@@ -483,6 +536,25 @@ mod tests {
             }
         }
         tris
+    }
+
+    #[test]
+    fn a_box_is_closed_and_turned_to_face_out() {
+        let out = shape_of(&cube(1.0)).unwrap();
+        assert!(out.closed());
+        assert_eq!(out.clone().facing_out(), out);
+        let inward: Vec<[Vec3; 3]> = cube(1.0).iter().map(|t| [t[0], t[2], t[1]]).collect();
+        let turned = shape_of(&inward).unwrap();
+        assert!(turned.closed());
+        let Shape::Polygons(turned) = turned.facing_out() else {
+            panic!("a box is polygons")
+        };
+        for p in &turned {
+            let centre = p.vertices.iter().sum::<Vec3>() / p.vertices.len() as f32;
+            assert!(p.normal.dot(centre) > 0.49, "a face turned in: {p:?}");
+        }
+        let open = shape_of(&quad(Vec3::ZERO, Vec3::X, Vec3::Z)).unwrap();
+        assert!(!open.closed());
     }
 
     fn uv_sphere(r: f32, rings: usize, segments: usize) -> Vec<[Vec3; 3]> {
