@@ -410,19 +410,43 @@ fn furnace_mean_with(albedo: f32, le: f32, set: RenderSettings) -> f32 {
 /// The furnace of walls 20 cm thick: its inward box inside an outward one, 20 cm larger every
 /// way, of the same emissive material; the image's mean (green) at 32^3 and 24x24.
 fn thick_furnace_mean(albedo: f32, le: f32, bounces: u32, tail: bool) -> f32 {
-    use voxgi::scene::builder::{unit_cube, NodeDesc};
+    boxed_furnace_mean(albedo, le, 2.4, false, bounces, tail)
+}
+
+/// The furnace inside an outward box `size` across (the furnace is 2 m), of the furnace's
+/// material or, `black`, of albedo 0 without emission; the image's mean (green) at 32^3 and
+/// 24x24.
+fn boxed_furnace_mean(
+    albedo: f32,
+    le: f32,
+    size: f32,
+    black: bool,
+    bounces: u32,
+    tail: bool,
+) -> f32 {
+    use voxgi::scene::builder::{unit_cube, MaterialDesc, NodeDesc};
     let (mut b, camera) = voxgi::hard::scenes::furnace(albedo, le);
-    let outside = b.add_mesh("outside", vec![unit_cube(Some(0))]);
+    let m = if black {
+        b.add_material(MaterialDesc::lambertian("black", [0.0; 3]))
+    } else {
+        0
+    };
+    let outside = b.add_mesh("outside", vec![unit_cube(Some(m))]);
     b.add_node(
         NodeDesc::new("outside")
             .mesh(outside)
             .translation([0.0, 1.0, 0.0])
-            .scale([2.4; 3]),
+            .scale([size; 3]),
     );
     let mut set = settings(Mode::Full, 32, 24);
     set.gi.bounces = bounces;
     set.gi.tail = tail;
-    builder_mean(&b, camera, set, &format!("thick walls, albedo {albedo}"))
+    builder_mean(
+        &b,
+        camera,
+        set,
+        &format!("walls of {size} m outside, black {black}"),
+    )
 }
 
 /// The image's mean (green) of the scene `b` seen from `camera` with `set`.
@@ -534,6 +558,26 @@ fn the_tail_holds_in_a_room_of_thick_walls() {
         (thick - thin).abs() < 0.1,
         "thick walls: the tail adds {thick} times the last bounce, single walls {thin}"
     );
+}
+
+#[test]
+fn thick_walls_keep_their_lit_sides_light() {
+    // The furnace (albedo 0.5, Le 1, one bounce, no tail) inside a black box 5 and 20 cm out
+    // (7.5 cm voxels): what the cones gather, (mean - Le) / (a Le), against the furnace of
+    // single walls. A coarse texel across a wall averaged the lit inner face with the dark
+    // outer one into half the light at full opacity: 0.79 and 0.83 of the single walls'.
+    // Measured 1.00 and 0.94 now that the dark far side of a lit wall holds no opacity
+    // edge-on.
+    let gather = |mean: f32| (mean - 1.0) / 0.5;
+    let single = gather(furnace_mean(0.5, 1.0, 1, false));
+    for size in [2.1, 2.4] {
+        let thick = gather(boxed_furnace_mean(0.5, 1.0, size, true, 1, false));
+        eprintln!("outer box {size} m: gather {thick}, single walls {single}");
+        assert!(
+            thick > 0.9 * single,
+            "outer box {size} m: the cones gather {thick}, with single walls {single}"
+        );
+    }
 }
 
 #[test]
