@@ -605,7 +605,7 @@ fn density(env: &mut Env, gi: &GiSettings, n: usize) -> Result<f64> {
     r.render(true)?;
     let v = r.read_voxels()?.expect("full mode lights voxels");
     let n = v.resolution;
-    let grid = crate::gi::VoxelGrid::fit(&s.bounds, n);
+    let grid = r.gi.as_ref().expect("full mode has voxels").volumes.grid;
     for z in 0..n {
         for y in 0..n {
             for x in 0..n {
