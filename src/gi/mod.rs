@@ -726,6 +726,15 @@ impl Gi {
             scene.voxel_bounds()
         };
         let grid = VoxelGrid::fit(&bounds, settings.voxels);
+        if bounds != scene.bounds {
+            log::info!(
+                "a ground plane reaches past the rest of the scene: the voxel grid covers {:.1} m \
+                 of its {:.1} m (voxels of {:.3} m)",
+                bounds.extent().max_element(),
+                scene.bounds.extent().max_element(),
+                grid.voxel_size()
+            );
+        }
         // The emission the voxels hold: every emissive instance's but the lights'.
         let max_emission = scene
             .instances
