@@ -288,16 +288,21 @@ void main() {
         if (v.filled) {
             float closed;
             if (two_sided) {
-                // Two-sided: each face reflects what falls on its side; the voxel holds their
-                // mean, and its light goes where the brighter side faces (as
-                // inject_radiance.comp's direct light does), not every way: a thin wall lit on
-                // one side stays dark on the other.
+                // Two-sided: each face reflects what falls on its side. The voxel shows one
+                // radiance, the brighter side's, and its light goes that way by how much brighter
+                // it is (as inject_radiance.comp's direct light does): a wall lit on one side
+                // stays dark on the other (seen_from, aniso_mip.glsl), and where both sides are
+                // alike each sees its own. Their mean halved the light of a wall thinner than a
+                // voxel whose outer face sees the dark.
                 vec4 gf = front_light, gb = back_gather;
                 vec3 front = v.albedo / PI * gf.rgb, back = v.albedo / PI * gb.rgb;
-                bounce = 0.5 * (front + back);
                 float lf = luminance(front), lb = luminance(back);
+                bounce = lf >= lb ? front : back;
                 side = (lf - lb) / max(lf + lb, 1e-30);
-                closed = 0.5 * (gf.a + gb.a);
+                // The series goes on from the side that gathered the light: an outer face that
+                // sees the void would halve it (as for one-sided voxels below).
+                float seen_f = luminance(gf.rgb), seen_b = luminance(gb.rgb);
+                closed = (gf.a * seen_f + gb.a * seen_b) / max(seen_f + seen_b, 1e-30);
             } else {
                 bounce = v.albedo / PI * front_light.rgb;
                 closed = front_light.a;
