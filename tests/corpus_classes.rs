@@ -11,9 +11,14 @@ const SIZE: u32 = 48;
 
 static ENV: Mutex<Option<Env>> = Mutex::new(None);
 
-/// The image's mean over the path tracer's for the corpus of seed 1's scene `class`-`number`.
-fn mean_ratio(class: Class, number: u32, spp: u32) -> f64 {
-    measure(class, number, spp).0
+/// Asserts that the image of `class`-`number` keeps more than `bound` of the path tracer's mean.
+fn assert_mean_above(class: Class, number: u32, bound: f64) {
+    let (r, _) = measure(class, number, 256);
+    assert!(
+        r > bound,
+        "{}-{number:03}: the image's mean {r:.3} of the reference's",
+        class.name()
+    );
 }
 
 /// The image's mean over the path tracer's and its relMSE against it.
@@ -51,11 +56,7 @@ fn measure(class: Class, number: u32, spp: u32) -> (f64, f64) {
 #[test]
 fn rough_glossy_floors_light_their_rooms() {
     for n in [0, 2, 4] {
-        let r = mean_ratio(Class::Materials, n, 256);
-        assert!(
-            r > 0.8,
-            "materials-{n:03}: the image's mean {r:.3} of the reference's"
-        );
+        assert_mean_above(Class::Materials, n, 0.8);
     }
 }
 
@@ -64,22 +65,14 @@ fn rough_glossy_floors_light_their_rooms() {
 /// room. Measured 0.84; before (none of it), 0.47.
 #[test]
 fn a_silver_floor_lights_its_room() {
-    let r = mean_ratio(Class::Materials, 10, 256);
-    assert!(
-        r > 0.78,
-        "materials-010: the image's mean {r:.3} of the reference's"
-    );
+    assert_mean_above(Class::Materials, 10, 0.78);
 }
 
 /// A lamp 1 cm from a wall in a small room (scale-006: a 5.4 W/sr lamp 4 cm from a surface,
 /// the room scaled by 0.27): its voxels take their patch's light. Measured 0.91; before, 0.54.
 #[test]
 fn a_lamp_a_centimetre_from_a_wall_lights_a_small_room() {
-    let r = mean_ratio(Class::Scale, 6, 256);
-    assert!(
-        r > 0.8,
-        "scale-006: the image's mean {r:.3} of the reference's"
-    );
+    assert_mean_above(Class::Scale, 6, 0.8);
 }
 
 /// Large emitters above other things (emitters-000: a 78 cm cube on a pedestal of its
@@ -88,11 +81,7 @@ fn a_lamp_a_centimetre_from_a_wall_lights_a_small_room() {
 /// before (shadowed from the centre alone), 0.70.
 #[test]
 fn voxels_hidden_from_an_emitters_centre_see_its_faces() {
-    let r = mean_ratio(Class::Emitters, 0, 256);
-    assert!(
-        r > 0.74,
-        "emitters-000: the image's mean {r:.3} of the reference's"
-    );
+    assert_mean_above(Class::Emitters, 0, 0.74);
 }
 
 /// Emissive cubes on pedestals of their footprint (emitters-000: 78 cm, its centre inside a
@@ -141,9 +130,5 @@ fn a_small_building_on_a_large_ground_gets_fine_voxels() {
 /// 0.0099); before, 0.801 (0.0153).
 #[test]
 fn a_wall_thinner_than_a_voxel_reflects_its_lit_faces_light() {
-    let r = mean_ratio(Class::Openings, 10, 256);
-    assert!(
-        r > 0.84,
-        "openings-010: the image's mean {r:.3} of the reference's"
-    );
+    assert_mean_above(Class::Openings, 10, 0.84);
 }
