@@ -10,8 +10,14 @@ layout(set = 1, binding = 6, std430) readonly buffer VoxelList {
     uint coords[];
 };
 
-// The reflectance sums hold this per voxel (64-bit fixed point: low word, high word).
-const float REFLECTANCE_ONE = 65536.0;
+// The reflectance sums' fixed point (64 bits: low word, high word): this many steps a unit, a
+// voxel's share at most REFLECTANCE_MAX units (a voxel's light is weighted by its gathered
+// light, which the radiance scale keeps under about 1e4 times pi): 2^24 voxels of the most
+// still fit in 64 bits, and light under a millionth rounds to nothing.
+const float REFLECTANCE_ONE = 1048576.0;
+const float REFLECTANCE_MAX = 1048576.0;
+// Words of the tail's sums (inject_bounce.comp): 4 sums of 4 values, 2 words each.
+const uint REFLECTANCE_WORDS = 32u;
 
 // This invocation's entry of the list.
 uint list_entry() {

@@ -3,10 +3,11 @@
 // what each listed voxel reflects; this adds it to the voxel's radiance. On the last bounce it
 // also adds the bounces after it as a geometric series, the ambient term of progressive
 // radiosity (Cohen, Chen, Wallace and Greenberg 1988): each further bounce returns lambda of the
-// one before, lambda being the mean albedo of the voxels that gathered light times the share of
-// their hemisphere that is closed (what the cones found), per channel. So the last bounce's light is scaled by
-// 1 / (1 - lambda): in a closed box of albedo a every voxel sends out Le / (1 - a). Not for
-// --paper, whose second bounce is its last.
+// one before, lambda being the voxels' albedo times the share of their hemisphere that is
+// closed (what the cones found), per channel, the mean over the voxels weighted by the light
+// each gathered times its closed share (inject_bounce.comp). So the last bounce's light is scaled by 1 / (1 - lambda):
+// in a closed box of albedo a every voxel sends out Le / (1 - a). Not for --paper, whose second
+// bounce is its last.
 #include "common.glsl"
 #include "voxel_common.glsl"
 #define VOXEL_SET 1
@@ -28,7 +29,7 @@ layout(set = 1, binding = 11, std430) readonly buffer Reflected { uvec2 reflecte
 // The bounce before's (the light of one order fewer), when there was one.
 layout(set = 1, binding = 13, std430) readonly buffer ReflectedBefore { uvec2 reflected_before[]; };
 // Fronts' sums, then open backs' (inject_bounce.comp).
-layout(set = 1, binding = 12, std430) readonly buffer Reflectance { uint reflectance[16]; };
+layout(set = 1, binding = 12, std430) readonly buffer Reflectance { uint reflectance[REFLECTANCE_WORDS]; };
 // Open backs' light (inject_radiance.comp), with FLAG_BACKS; the reflected buffers then hold a
 // second entry a voxel, its back's (inject_bounce.comp).
 layout(set = 1, binding = 14, rgba16f) uniform image3D back_radiance;
@@ -52,20 +53,32 @@ vec3 rgb(uvec2 entry) {
     return vec3(unpackHalf2x16(entry.x), unpackHalf2x16(entry.y).x);
 }
 
+// The mean reflectance of the sums at k: r, g, b over their weight.
+vec3 mean_reflectance(uint k) {
+    float weight = fixed_sum(k + 6u);
+    return weight > 0.0 ? vec3(fixed_sum(k), fixed_sum(k + 2u), fixed_sum(k + 4u)) / weight
+                        : vec3(0.0);
+}
+
 // The light entry k reflected, on the last bounce with the bounces after it, by the series of
 // the fronts' (sums at 0) or the backs' (at 8) reflectance.
 vec3 with_tail(uint k, uint sums) {
     vec3 bounce = rgb(reflected[k]);
     if (push.last == 0u) return bounce;
-    float voxels = fixed_sum(sums + 6u);
-    vec3 lambda = vec3(fixed_sum(sums), fixed_sum(sums + 2u), fixed_sum(sums + 4u))
-                / max(voxels, 1.0);
+    // The next bounce returns lambda of this one's light, lambda weighted by where that light is
+    // (inject_bounce.comp). The bounces after it spread over the scene and tend to the scene's
+    // own ratio, the largest the transport has, which each estimate only bounds from below:
+    // they go on by the larger of it and the mean over every voxel that gathered light (a room
+    // of light walls over a dark floor lit under its lamp: materials-010's lambda 0.62 weighted,
+    // 0.68 even).
+    vec3 lambda = min(mean_reflectance(sums), vec3(MAX_LAMBDA));
+    vec3 after = max(lambda, min(mean_reflectance(sums + 16u), vec3(MAX_LAMBDA)));
     // The series continues the order of light this bounce added, not the orders before
     // it, which the bounces before traced: with three bounces the third's light is the
     // second order plus the first again, and scaling all of it counted the first order
     // twice over (sky-room 0.023 with two bounces, 0.078 with three, 0.136 with four).
     vec3 before = push.before != 0u ? rgb(reflected_before[k]) : vec3(0.0);
-    return max(before + (bounce - before) / (1.0 - min(lambda, vec3(MAX_LAMBDA))), 0.0);
+    return max(before + (bounce - before) * (1.0 + lambda / (1.0 - after)), 0.0);
 }
 
 void main() {

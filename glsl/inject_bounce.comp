@@ -35,14 +35,15 @@ layout(set = 1, binding = 5, rgba8) uniform image3D radiance;
 #ifndef SHARE
 layout(set = 1, binding = 11, std430) writeonly buffer Reflected { uvec2 reflected[]; };
 #endif
-// Over the listed voxels: albedo x closed share (r, g, b) and their count, each as 64-bit fixed
-// point (low word, high word; REFLECTANCE_ONE a voxel); then the same over the open backs that
-// gathered light (the backs' own series: a room of quads facing out holds its light on their
-// backs).
+// The tail's sums (bounce_tail.comp), each as 64-bit fixed point (low word, high word;
+// bounce_common.glsl): over the listed voxels, albedo x closed share (r, g, b) and the weights,
+// each voxel weighted by the light it gathered (its luminance) times its closed share; then the
+// same over the open backs (the backs' own series: a room of quads facing out holds its light
+// on their backs); then both again with every voxel that gathered light weighing the same.
 #ifndef SHARE
-layout(set = 1, binding = 12, std430) buffer Reflectance { uint reflectance[16]; };
-shared vec4 partial[64];
-shared vec4 partial_back[64];
+layout(set = 1, binding = 12, std430) buffer Reflectance { uint reflectance[REFLECTANCE_WORDS]; };
+shared uvec2 partial[4][64];
+shared uvec2 partial_back[4][64];
 #endif
 // Voxels a side of the blocks that share a gather (volumes.rs: BOUNCE_BLOCK).
 const int BLOCK = 4;
@@ -242,18 +243,58 @@ bool block_gather_for(ivec3 c, Voxel v, out vec4 light) {
     return true;
 }
 
-// Adds a workgroup's sum, already in fixed point, to the 64-bit word pair at k.
-void add_fixed(uint k, float x) {
-    uint add = uint(x);
-    uint before = atomicAdd(reflectance[k], add);
-    if (before > 0xFFFFFFFFu - add) atomicAdd(reflectance[k + 1u], 1u);
+// x in the sums' fixed point, as (low word, high word).
+uvec2 to_fixed(float x) {
+    float f = floor(clamp(x, 0.0, REFLECTANCE_MAX) * REFLECTANCE_ONE + 0.5);
+    float high = floor(f / 4294967296.0);
+    return uvec2(uint(f - high * 4294967296.0), uint(high));
+}
+
+uvec2 add64(uvec2 a, uvec2 b) {
+    uint low = a.x + b.x;
+    return uvec2(low, a.y + b.y + (low < a.x ? 1u : 0u));
+}
+
+// Adds a workgroup's sum, in fixed point, to the 64-bit word pair at k.
+void add_fixed(uint k, uvec2 x) {
+    if (x == uvec2(0u)) return;
+    uint before = atomicAdd(reflectance[k], x.x);
+    uint carry = before > 0xFFFFFFFFu - x.x ? 1u : 0u;
+    if (x.y + carry > 0u) atomicAdd(reflectance[k + 1u], x.y + carry);
+}
+
+// Adds this workgroup's fronts' (a) and backs' (b) shares to the sums at `base` and base + 8.
+void add_sums(vec4 a, vec4 b, uint base) {
+    uint l = gl_LocalInvocationIndex;
+    for (uint k = 0u; k < 4u; k++) {
+        partial[k][l] = to_fixed(a[k]);
+        partial_back[k][l] = to_fixed(b[k]);
+    }
+    barrier();
+    for (uint s = 32u; s > 0u; s >>= 1u) {
+        if (l < s) {
+            for (uint k = 0u; k < 4u; k++) {
+                partial[k][l] = add64(partial[k][l], partial[k][l + s]);
+                partial_back[k][l] = add64(partial_back[k][l], partial_back[k][l + s]);
+            }
+        }
+        barrier();
+    }
+    if (l == 0u) {
+        for (uint k = 0u; k < 4u; k++) {
+            add_fixed(base + 2u * k, partial[k][0]);
+            add_fixed(base + 8u + 2u * k, partial_back[k][0]);
+        }
+    }
+    barrier();
 }
 
 void main() {
     start_queue();
     uint i = list_entry();
-    vec4 mine = vec4(0.0);  // albedo x closed share, and 1, for the sums
-    vec4 mine_back = vec4(0.0);  // the same for an open back that gathered light
+    vec4 mine = vec4(0.0);  // albedo x closed share, and 1, weighted, for the sums
+    vec4 mine_back = vec4(0.0);  // the same for an open back
+    vec4 mine_even = vec4(0.0), mine_back_even = vec4(0.0);  // the same, unweighted
     // What the voxel gathers: its front (or its block's) and its back, queued or taken.
     Voxel v;
     v.filled = false;
@@ -309,16 +350,23 @@ void main() {
                 if (open) {
                     vec4 gb = back_gather;
                     back_light = v.albedo / PI * gb.rgb;
-                    if (luminance(gb.rgb) > 0.0) {
-                        mine_back = vec4(v.albedo * clamp(gb.a, 0.0, 1.0), 1.0);
-                    }
+                    float cb = clamp(gb.a, 0.0, 1.0);
+                    mine_back = vec4(v.albedo * cb, 1.0) * luminance(gb.rgb) * cb;
+                    if (luminance(gb.rgb) > 0.0) mine_back_even = vec4(v.albedo * cb, 1.0);
                 }
             }
-            // Only voxels that gathered light continue its series: the dark outer faces of a
-            // closed room's thick walls see the void (closed share 0) and would halve it.
+            // Each voxel weighs in the series by the light it gathered times its closed share:
+            // the next bounce gathers where this one's light is (a lit room on a dark ground,
+            // white walls over a dark floor: openings-010's lambda 0.24 over every surface that
+            // gathered light, where the path tracer's orders go by 0.52), and a surface gathers
+            // the next bounce only from what closes its hemisphere (a roof's top under the sky
+            // gathers much light and returns none). The dark outer faces of a closed room's
+            // thick walls see the void and weigh nothing.
             float gathered_light = two_sided ? luminance(front_light.rgb + back_gather.rgb)
                                              : luminance(front_light.rgb);
-            if (gathered_light > 0.0) mine = vec4(v.albedo * clamp(closed, 0.0, 1.0), 1.0);
+            float c = clamp(closed, 0.0, 1.0);
+            mine = vec4(v.albedo * c, 1.0) * gathered_light * c;
+            if (gathered_light > 0.0) mine_even = vec4(v.albedo * c, 1.0);
         }
         bounce *= frame.tuning.y;
         back_light *= frame.tuning.y;
@@ -330,26 +378,11 @@ void main() {
             reflected[i] = uvec2(packHalf2x16(bounce.rg), packHalf2x16(vec2(bounce.b, side)));
         }
     }
-    // The workgroup's sum, then one atomic add per word. Each voxel's share is rounded to the
-    // fixed point first: 64 whole numbers of at most 2^16 add up exactly in a float whatever
-    // its order, and the list's order (which voxels share a workgroup) changes from run to run.
-    uint l = gl_LocalInvocationIndex;
-    partial[l] = floor(mine * REFLECTANCE_ONE + 0.5);
-    partial_back[l] = floor(mine_back * REFLECTANCE_ONE + 0.5);
-    barrier();
-    for (uint s = 32u; s > 0u; s >>= 1u) {
-        if (l < s) {
-            partial[l] += partial[l + s];
-            partial_back[l] += partial_back[l + s];
-        }
-        barrier();
-    }
-    if (l == 0u && partial[0].w > 0.0) {
-        for (uint k = 0u; k < 4u; k++) add_fixed(2u * k, partial[0][k]);
-    }
-    if (l == 0u && partial_back[0].w > 0.0) {
-        for (uint k = 0u; k < 4u; k++) add_fixed(8u + 2u * k, partial_back[0][k]);
-    }
+    // The workgroup's sums, then one atomic add per word. Each voxel's share is rounded to the
+    // fixed point first and added as integers, exactly whatever the order: the list's order
+    // (which voxels share a workgroup) changes from run to run.
+    add_sums(mine, mine_back, 0u);
+    add_sums(mine_even, mine_back_even, 16u);
 }
 #endif  // SHARE
 #endif

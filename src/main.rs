@@ -162,8 +162,8 @@ struct GiOpts {
     #[arg(long, requires = "paper")]
     paper_slips: bool,
     /// The last bounce does not add the bounces after it (by default it adds them as a
-    /// geometric series: the voxels' mean albedo times their closed share, at most 0.8, is each
-    /// further bounce's share of the one before)
+    /// geometric series whose ratio is the voxels' albedo times their closed share, their mean
+    /// weighted by the light each gathered, at most 0.8)
     #[arg(long)]
     no_tail: bool,
     /// Emissive surfaces stay voxel emission, lit by the cones (by default up to eight, the

@@ -62,7 +62,8 @@ fn rough_glossy_floors_light_their_rooms() {
 
 /// A smooth metal floor (materials-010: silver of roughness 0.2, a lamp 9 cm under the
 /// ceiling): its voxels reflect its mirror lobe's light to the wide cones that gather for the
-/// room. Measured 0.84; before (none of it), 0.47.
+/// room. Measured 0.82 (0.84 before the tail's series weighed its voxels by their light); before
+/// (none of it), 0.47.
 #[test]
 fn a_silver_floor_lights_its_room() {
     assert_mean_above(Class::Materials, 10, 0.78);
@@ -130,4 +131,13 @@ fn a_small_building_on_a_large_ground_gets_fine_voxels() {
 #[test]
 fn a_wall_thinner_than_a_voxel_reflects_its_lit_faces_light() {
     assert_mean_above(Class::Openings, 10, 0.84);
+}
+
+/// The tail's series weighs each voxel by the light it gathered times its closed share
+/// (objects-028: a room of 17 cm walls on a ground, under a spot; the bounces after the second
+/// were 0.45 of the path tracer's when every voxel that gathered light weighed the same, the dim
+/// ground's as much as the lit room's). Measured at 48x48: 0.978; before, 0.890.
+#[test]
+fn the_bounces_not_traced_follow_the_light() {
+    assert_mean_above(Class::Objects, 28, 0.94);
 }

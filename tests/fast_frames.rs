@@ -139,11 +139,14 @@ fn upsampled_indirect_light_keeps_surfaces_apart() {
         // a quarter of their light, the worst by 1.03 (a floor pixel in the pole's contact
         // shadow, interpolated from floor blocks a pixel further out); scale 4 4.4e-4, 0.25%,
         // 0.95. Upsampled bilinearly without the surface test, scale 2 gave 1.9e-3, 0.72% and
-        // 2.5 (the floor's light on the wall's foot and the wall's on the pole).
+        // 2.5 (the floor's light on the wall's foot and the wall's on the pole). Since the
+        // tail's series weighs the voxels by their light (more of it in the corners the
+        // pixels' blocks straddle), scale 4: 4.6e-4 -> 5.1e-4 and 0.26% -> 0.40% of the pixels
+        // off by a quarter (the bound 0.4% -> 0.5%).
         let (max_e, max_off) = if scale == 2 {
             (2e-4, 1e-3)
         } else {
-            (7e-4, 4e-3)
+            (7e-4, 5e-3)
         };
         assert!(e < max_e, "scale {scale}: relMSE {e}");
         assert!(
@@ -214,10 +217,12 @@ fn blocks_share_a_specular_cone_only_where_it_matches_the_pixels() {
         // the directional volumes too (the column's and the floor's, roughness 0.35 keeping
         // 65% of it there), 0.35: 3.6e-3, 4.0% off; sharing regardless of the reflection's
         // direction: 1.0e-2.
+        // Since the tail's series weighs the voxels by their light: 0.35 3.6e-3 -> 4.1e-3, 0.6
+        // 2.6e-3 -> 3.0e-3 (its bound 3e-3 -> 3.5e-3), the shares off the same.
         let (max_e, max_off) = if roughness < 0.5 {
             (4.5e-3, 0.05)
         } else {
-            (3e-3, 0.035)
+            (3.5e-3, 0.035)
         };
         assert!(e < max_e, "roughness {roughness}: relMSE {e}");
         assert!(

@@ -217,17 +217,13 @@ fn door_room() {
     check_open("door-room", 0.44)
 }
 
-/// sky-room's and sky-room-outward's goal (0.02) is met at 64x64 (0.0162 and 0.0171) and at
-/// issue 31's 256x256 (docs/environment.md), not at the tests' 48x48: 0.0231 and 0.0259
-/// (before the voxels held their backs' light, the room facing out measured 0.0818 here).
+/// sky-room's goal (0.02) is met at 64x64 (0.0162) and at issue 31's 256x256
+/// (docs/environment.md), not at the tests' 48x48: 0.0231. sky-room-outward (its walls facing
+/// out) meets it here since the tail's series weighs its voxels by their light (0.0259 ->
+/// 0.0183; before the voxels held their backs' light, 0.0818).
 #[test]
 fn sky_room() {
     check_open("sky-room", 0.024)
-}
-
-#[test]
-fn sky_room_outward() {
-    check_open("sky-room-outward", 0.027)
 }
 
 macro_rules! cases {
@@ -236,7 +232,7 @@ macro_rules! cases {
 
         #[test]
         fn every_case_has_a_test() {
-            let tested = [$($name,)* "door-room", "sky-room", "sky-room-outward"];
+            let tested = [$($name,)* "door-room", "sky-room"];
             for c in CASES {
                 assert!(tested.contains(&c.name), "no test for the hard case {}", c.name);
             }
@@ -273,6 +269,7 @@ cases! {
     grazing_surfaces => "grazing-surfaces",
     cones_leave_grid => "cones-leave-grid",
     sky_yard => "sky-yard",
+    sky_room_outward => "sky-room-outward",
     camera_in_volume => "camera-in-volume",
     camera_in_voxel => "camera-in-voxel",
     grid_48 => "grid-48",

@@ -40,9 +40,10 @@ struct Tail {
     enabled: bool,
 }
 
-/// Bytes of the reflectance sums: r, g, b and count, two words each, over the voxels' fronts
-/// and then over the open backs that gathered light.
-const REFLECTANCE_BYTES: u64 = 64;
+/// Bytes of the tail's sums (glsl/inject_bounce.comp): r, g, b and their weight, two words
+/// each, over the voxels' fronts and then over the open backs, weighted by the light each
+/// voxel gathered and then evenly (checked against the shaders' REFLECTANCE_WORDS).
+const REFLECTANCE_BYTES: u64 = 128;
 
 /// The first room in the voxel list: every voxel of a small grid; surfaces (about N^2 per side
 /// of the grid they cross) beyond that, so that 512^3 starts within a 128 MiB storage buffer. A
@@ -412,5 +413,22 @@ impl Bounce {
             p.pipeline.push(d, cmd, &push);
             d.cmd_dispatch_indirect(cmd, self.list.raw, 0);
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::REFLECTANCE_BYTES;
+    use crate::vk::reflect::shader_interface;
+
+    #[test]
+    fn the_tail_sums_are_as_large_as_the_shaders_declare() {
+        for shader in ["inject_bounce.comp", "bounce_tail.comp"] {
+            let block = shader_interface(shader).unwrap();
+            let sums = block
+                .struct_named("Reflectance")
+                .expect("the Reflectance block");
+            assert_eq!(sums.size as u64, REFLECTANCE_BYTES, "{shader}");
+        }
     }
 }

@@ -69,7 +69,8 @@ pub struct GiSettings {
     /// Mip levels finer than the cone's diameter at which cones sample (the paper: 1).
     pub lod_offset: f32,
     /// The last bounce also adds the bounces after it, as a geometric series whose ratio is
-    /// the voxels' mean albedo times their closed share, at most 0.8 (glsl/bounce_tail.comp).
+    /// the voxels' albedo times their closed share, their mean weighted by the light each
+    /// gathered, at most 0.8 (glsl/bounce_tail.comp has the details).
     /// Needs `bounces` >= 2; not for `paper`.
     pub tail: bool,
     /// Emissive surfaces light the scene as area lights, integrated per pixel, with soft
