@@ -2,12 +2,11 @@
 // The bounces not traced, and the bounce's light into the voxels. inject_bounce.comp gathered
 // what each listed voxel reflects; this adds it to the voxel's radiance. On the last bounce it
 // also adds the bounces after it as a geometric series, the ambient term of progressive
-// radiosity (Cohen, Chen, Wallace and Greenberg 1988): each further bounce returns lambda of the
-// one before, lambda being the voxels' albedo times the share of their hemisphere that is
-// closed (what the cones found), per channel, the mean over the voxels weighted by the light
-// each gathered times its closed share (inject_bounce.comp). So the last bounce's light is scaled by 1 / (1 - lambda):
-// in a closed box of albedo a every voxel sends out Le / (1 - a). Not for --paper, whose second
-// bounce is its last.
+// radiosity (Cohen, Chen, Wallace and Greenberg 1988). A voxel returns its albedo times the
+// share of its hemisphere that is closed (what the cones found), per channel; the next bounce
+// returns lambda of the last, the mean over the voxels weighted by where the light is, and the
+// ones after it a ratio at least as large (with_tail). In a closed box of albedo a both are a,
+// and every voxel sends out Le / (1 - a). Not for --paper, whose second bounce is its last.
 #include "common.glsl"
 #include "voxel_common.glsl"
 #define VOXEL_SET 1
