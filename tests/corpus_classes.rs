@@ -139,66 +139,59 @@ fn a_ground_a_few_times_wider_than_its_room_is_left_out() {
 #[test]
 fn a_ground_is_the_widest_flat_instance_far_wider_than_the_rest() {
     use glam::Vec3;
-    let flat_square = |s: &mut voxgi::scene::Scene, half: f32, y: f32, m: u32| {
+    use voxgi::scene::Scene;
+    // A scene of grey parts.
+    let scene = |parts: &dyn Fn(&mut Scene, u32)| {
+        let mut s = gpu::empty_scene();
+        let m = gpu::lambert(&mut s, Vec3::splat(0.5));
+        parts(&mut s, m);
+        s
+    };
+    let flat_square = |s: &mut Scene, half: f32, y: f32, m: u32| {
         let c = [(-1.0, 1.0), (1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)];
         gpu::quad(s, c.map(|(x, z)| Vec3::new(x * half, y, z * half)), m);
     };
     // Something a metre a side, not flat.
-    let block = |s: &mut voxgi::scene::Scene, m: u32| {
+    let block = |s: &mut Scene, m: u32| {
         let (o, x, y, z) = (Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z);
         gpu::mesh(s, &[[o, x, y], [o, z, x]], m);
     };
-    let width = |s: &voxgi::scene::Scene| s.voxel_bounds().extent().max_element();
+    let check = |what: &str, s: Scene, width: f32, bottom: f32| {
+        let b = s.voxel_bounds();
+        let ok = (b.extent().x - width).abs() < 1e-4 && (b.min.y - bottom).abs() < 1e-4;
+        assert!(ok, "{what}: the grid covers {b:?}");
+    };
 
     // A block on a ground 3 m wide: the ground is cut to the block and half its size each side.
-    let mut s = gpu::empty_scene();
-    let m = gpu::lambert(&mut s, Vec3::splat(0.5));
-    flat_square(&mut s, 1.5, 0.0, m);
-    block(&mut s, m);
-    assert!(
-        (width(&s) - 2.0).abs() < 1e-4,
-        "a block on a ground: {}",
-        width(&s)
-    );
-
+    let s = scene(&|s, m| {
+        flat_square(s, 1.5, 0.0, m);
+        block(s, m);
+    });
+    check("a block on a ground", s, 2.0, 0.0);
     // The block 2 m over the ground: the grid reaches down to it.
-    let mut s = gpu::empty_scene();
-    let m = gpu::lambert(&mut s, Vec3::splat(0.5));
-    flat_square(&mut s, 2.0, -2.0, m);
-    block(&mut s, m);
-    let b = s.voxel_bounds();
-    assert!(
-        (b.min.y + 2.0).abs() < 1e-4 && (b.extent().x - 2.0).abs() < 1e-4,
-        "a block over a ground: {b:?}"
-    );
-
+    let s = scene(&|s, m| {
+        flat_square(s, 2.0, -2.0, m);
+        block(s, m);
+    });
+    check("a block over a ground", s, 2.0, -2.0);
     // A lamp's quad over a floor: nothing stands on it, the floor stays.
-    let mut s = gpu::empty_scene();
-    let m = gpu::lambert(&mut s, Vec3::splat(0.5));
-    flat_square(&mut s, 2.0, 0.0, m);
-    flat_square(&mut s, 0.25, 1.0, m);
-    assert!(
-        (width(&s) - 4.0).abs() < 1e-4,
-        "a lamp over a floor: {}",
-        width(&s)
-    );
-
+    let s = scene(&|s, m| {
+        flat_square(s, 2.0, 0.0, m);
+        flat_square(s, 0.25, 1.0, m);
+    });
+    check("a lamp over a floor", s, 4.0, 0.0);
     // A room of single quads, 4 m wide, with a block in it: its walls count with the block, so
     // its floor is no ground.
-    let mut s = gpu::empty_scene();
-    let m = gpu::lambert(&mut s, Vec3::splat(0.5));
-    flat_square(&mut s, 2.0, 0.0, m);
-    flat_square(&mut s, 2.0, 3.0, m);
-    for x in [-2.0f32, 2.0] {
-        let c = [(0.0, -2.0), (0.0, 2.0), (3.0, 2.0), (3.0, -2.0)];
-        gpu::quad(&mut s, c.map(|(y, z)| Vec3::new(x, y, z)), m);
-    }
-    block(&mut s, m);
-    assert!(
-        (width(&s) - 4.0).abs() < 1e-4,
-        "a room of quads: {}",
-        width(&s)
-    );
+    let s = scene(&|s, m| {
+        flat_square(s, 2.0, 0.0, m);
+        flat_square(s, 2.0, 3.0, m);
+        for x in [-2.0f32, 2.0] {
+            let c = [(0.0, -2.0), (0.0, 2.0), (3.0, 2.0), (3.0, -2.0)];
+            gpu::quad(s, c.map(|(y, z)| Vec3::new(x, y, z)), m);
+        }
+        block(s, m);
+    });
+    check("a room of quads", s, 4.0, 0.0);
 }
 
 /// Walls thinner than a voxel (openings-010: 14 cm walls in voxels of 23 cm, a room open on one
