@@ -342,9 +342,9 @@ const GROUND_SPAN: f32 = 1.0 + 2.0 * GROUND_MARGIN;
 impl Scene {
     /// What the voxel grid covers: the bounds, or where a ground plane reaches far past
     /// everything else (a small building on a large ground), everything else widened by
-    /// GROUND_MARGIN of its size on each side, and down to the ground. The grid spans its largest extent in 64 voxels
-    /// by default: a ground 10 times the building's gave voxels as wide as a room's walls are
-    /// apart. Beyond the grid the cones see the environment.
+    /// GROUND_MARGIN of its size on each side, and down to the ground. The grid spans its
+    /// largest extent in 64 voxels by default: a ground 10 times the building's gave voxels as
+    /// wide as a room's walls are apart. Beyond the grid the cones see the environment.
     pub fn voxel_bounds(&self) -> Aabb {
         if !self.animations.is_empty() {
             return self.bounds;
@@ -354,7 +354,12 @@ impl Scene {
             .iter()
             .map(|i| self.instance_bounds(i))
             .collect();
-        let flat = |b: &Aabb| b.extent().min_element() <= 1e-3 * b.extent().max_element();
+        // The axes along which an instance is thinner than a thousandth of its width.
+        let thin = |b: &Aabb| {
+            b.extent()
+                .cmple(Vec3::splat(1e-3 * b.extent().max_element()))
+        };
+        let flat = |b: &Aabb| thin(b).any();
         // The widest flat instance is the ground if it is far wider than all the rest
         // together (the rest counts every other instance: a room of single quads keeps its
         // walls and its floor), and something that is not flat stands on it (a lamp's quad
@@ -371,23 +376,18 @@ impl Scene {
         else {
             return self.bounds;
         };
-        let mut rest = Aabb::EMPTY;
-        for (_, b) in boxes.iter().enumerate().filter(|&(i, _)| i != widest) {
-            rest = rest.union(b);
-        }
+        let g = &boxes[widest];
+        let rest = (boxes.iter().enumerate())
+            .filter(|&(i, _)| i != widest)
+            .fold(Aabb::EMPTY, |r, (_, b)| r.union(b));
         let span = rest.extent().max_element();
-        let ground = boxes[widest].extent().max_element() > GROUND_SPAN * span;
-        if rest.is_empty() || !ground {
+        if g.extent().max_element() <= GROUND_SPAN * span {
             return self.bounds;
         }
         let pad = Vec3::splat(span * GROUND_MARGIN);
         // Across its plane the ground stays in, however high above it the rest floats.
-        let g = &boxes[widest];
-        let thin = g
-            .extent()
-            .cmple(Vec3::splat(1e-3 * g.extent().max_element()));
-        let min = Vec3::select(thin, (rest.min - pad).min(g.min), rest.min - pad);
-        let max = Vec3::select(thin, (rest.max + pad).max(g.max), rest.max + pad);
+        let min = Vec3::select(thin(g), (rest.min - pad).min(g.min), rest.min - pad);
+        let max = Vec3::select(thin(g), (rest.max + pad).max(g.max), rest.max + pad);
         Aabb {
             min: min.max(self.bounds.min),
             max: max.min(self.bounds.max),
