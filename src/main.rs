@@ -515,6 +515,10 @@ struct ReferenceCmd {
     /// tracer can do
     #[arg(long, value_name = "B", value_parser = bounces_range())]
     bounces: Option<u32>,
+    /// Camera paths alone, without the light paths joined to them (to measure what those
+    /// buy: the noise of a lamp's bright spot on a nearby surface)
+    #[arg(long)]
+    no_light_paths: bool,
     /// Display exposure for .png, in stops
     #[arg(long, value_name = "EV", default_value_t = 0.0)]
     exposure: f32,
@@ -1325,6 +1329,7 @@ fn reference(c: ReferenceCmd) -> Result<()> {
         seed: c.seed,
         bounces: c.bounces,
         progress: true,
+        light_paths: !c.no_light_paths,
         ..Default::default()
     };
     let (w, h, spp) = (settings.width, settings.height, settings.spp);

@@ -4,7 +4,9 @@
 //!
 //! Unidirectional path tracing with next-event estimation: punctual lights are sampled
 //! directly; emissive triangles are sampled by area in proportion to their power and combined
-//! with BRDF sampling by multiple importance sampling (power heuristic). Paths end by Russian
+//! with BRDF sampling by multiple importance sampling (power heuristic). One light path of one
+//! segment a sample (a light's ray to the first surface it meets) is joined to every vertex of
+//! the camera's path and weighed against those ways (`light_paths`). Paths end by Russian
 //! roulette. A path that leaves the scene takes the environment's radiance (black without
 //! one); an environment image is also sampled directly, in proportion to its texels' power,
 //! and combined with BRDF sampling by the power heuristic. Each pixel is the mean of samples jittered over its
@@ -14,6 +16,7 @@
 pub mod brdf;
 pub mod bvh;
 pub mod environment;
+pub mod light_paths;
 pub mod sampling;
 pub mod texture;
 pub mod world;
@@ -22,8 +25,9 @@ use crate::output::RadianceImage;
 use crate::scene::Scene;
 use environment::EnvLight;
 use glam::Vec3;
+use light_paths::{CameraVertex, LightStarts};
 use rayon::prelude::*;
-use sampling::{power_heuristic, Frame, Pcg32};
+use sampling::{power_heuristic, power_heuristic_among, Frame, Pcg32};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 use world::{punctual, World};
@@ -51,6 +55,9 @@ pub struct ReferenceSettings {
     /// Next-event estimation of an environment image by its texels' power (off: the
     /// environment is found by BRDF sampling alone, to measure what this buys).
     pub env_sampling: bool,
+    /// Light paths joined to the camera's (light_paths.rs; off: the camera's paths alone, to
+    /// measure what they buy).
+    pub light_paths: bool,
 }
 
 impl Default for ReferenceSettings {
@@ -65,6 +72,7 @@ impl Default for ReferenceSettings {
             rr_depth: 3,
             progress: false,
             env_sampling: true,
+            light_paths: true,
         }
     }
 }
@@ -98,6 +106,7 @@ pub fn render_full(scene: &Scene, settings: &ReferenceSettings) -> ReferenceOutp
         .as_ref()
         .map(|e| EnvLight::new(e, settings.env_sampling));
     let camera = CameraRays::new(scene, w, h);
+    let starts = Some(LightStarts::new(&world)).filter(|s| settings.light_paths && s.any());
     let setup_seconds = start.elapsed().as_secs_f64();
     let bad = AtomicU64::new(0);
     let progress = if settings.progress {
@@ -115,7 +124,15 @@ pub fn render_full(scene: &Scene, settings: &ReferenceSettings) -> ReferenceOutp
                 for _ in 0..spp {
                     let j = rng.next_2d();
                     let d = camera.direction(x as f32 + j.x, y as f32 + j.y);
-                    let l = trace(&world, env.as_ref(), camera.eye, d, &mut rng, settings);
+                    let l = trace(
+                        &world,
+                        env.as_ref(),
+                        starts.as_ref(),
+                        camera.eye,
+                        d,
+                        &mut rng,
+                        settings,
+                    );
                     if !l.is_finite() {
                         bad.fetch_add(1, Ordering::Relaxed);
                         continue;
@@ -214,9 +231,11 @@ fn offset_origin(p: Vec3, n: Vec3) -> Vec3 {
 }
 
 /// One path from the camera: the radiance it carries back.
+#[allow(clippy::too_many_arguments)]
 fn trace(
     world: &World,
     env: Option<&EnvLight>,
+    starts: Option<&LightStarts>,
     eye: Vec3,
     dir: Vec3,
     rng: &mut Pcg32,
@@ -230,9 +249,17 @@ fn trace(
     let mut bsdf_pdf = 0.0f32;
     // Punctual lights are sampled at every hit up to depth B, emitters up to B - 1; emission
     // met by BSDF sampling at depth B pairs (MIS) with the emitter sampled at B - 1.
-    let max_depth = s.bounces.map_or(s.max_depth, |b| (b + 1).min(s.max_depth));
+    let max_depth = s
+        .bounces
+        .map_or(s.max_depth, |b| (b + 1).min(s.max_depth))
+        .max(1);
     let emitter_depths = s.bounces.unwrap_or(u32::MAX);
-    for depth in 0..max_depth.max(1) {
+    let light_vertex = starts.and_then(|st| st.sample(world, rng).map(|v| (st, v)));
+    // The light path's density of landing on a vertex is weighed against the camera path's
+    // of reaching it (per unit area there), which needs the vertex before: for the last
+    // vertex, that density and its normal, where a light path could have been joined there.
+    let mut last: Option<(f32, Vec3)> = None;
+    for depth in 0..max_depth {
         let Some(hit) = world.intersect(o, d, f32::INFINITY) else {
             // Left the scene: the environment, weighted against its direct sampling at the
             // vertex before (which pairs with this escape as an emitter's sample does).
@@ -248,14 +275,29 @@ fn trace(
         };
         let wo = -d;
         let surf = world.surface(&hit, wo);
+        // Per unit area here, the density of the last vertex's BRDF sample landing here.
+        let reach = (bsdf_pdf > 0.0).then(|| bsdf_pdf * surf.ng.dot(wo).abs() / (hit.t * hit.t));
         let le = world.emission(surf.tri, surf.uv, surf.front);
         if le != Vec3::ZERO {
-            let weight = if bsdf_pdf > 0.0 {
-                let cos_light = surf.ng.dot(wo).abs();
-                let light_pdf = world.emitter_pdf_area(surf.tri) * hit.t * hit.t / cos_light;
-                power_heuristic(bsdf_pdf, light_pdf)
-            } else {
-                1.0
+            let weight = match (bsdf_pdf > 0.0, last, starts) {
+                (false, _, _) => 1.0,
+                (true, Some((reach_last, ng_last)), Some(st)) => {
+                    // Per unit area of the last vertex and of this one: its BRDF finding the
+                    // emitter, next-event estimation there, a light path landing there.
+                    let cos_light = surf.ng.dot(wo).abs();
+                    let pe = world.emitter_pdf_area(surf.tri);
+                    let n_front = world.front_normal(surf.tri);
+                    let p_brdf = reach_last * bsdf_pdf * cos_light / (hit.t * hit.t);
+                    let p_light = st.emitter_pdf(world, surf.tri, pe, n_front, wo)
+                        * ng_last.dot(d).abs()
+                        / (hit.t * hit.t);
+                    power_heuristic_among(p_brdf, &[reach_last * pe, p_light])
+                }
+                (true, _, _) => {
+                    let cos_light = surf.ng.dot(wo).abs();
+                    let light_pdf = world.emitter_pdf_area(surf.tri) * hit.t * hit.t / cos_light;
+                    power_heuristic(bsdf_pdf, light_pdf)
+                }
             };
             l += beta * le * weight;
         }
@@ -264,7 +306,7 @@ fn trace(
         let wo_local = frame.to_local(wo);
         let origin = offset_origin(surf.p, surf.ng);
 
-        for light in &world.lights {
+        for (index, light) in world.lights.iter().enumerate() {
             let Some((wi, dist, irradiance)) = punctual(light, surf.p) else {
                 continue;
             };
@@ -282,7 +324,17 @@ fn trace(
                 f32::INFINITY
             };
             if !world.occluded(origin, wi, tmax) {
-                l += beta * f * wi_local.z * irradiance;
+                // Against a light path from this light landing here (its density per unit
+                // area here; both paths end at the light's one point).
+                let weight = match (reach, starts) {
+                    (Some(reach), Some(st)) => {
+                        let p_light =
+                            st.punctual_pdf(world, index, -wi) * surf.ng.dot(wi) / (dist * dist);
+                        power_heuristic_among(reach, &[p_light])
+                    }
+                    _ => 1.0,
+                };
+                l += beta * f * wi_local.z * irradiance * weight;
             }
         }
 
@@ -309,7 +361,23 @@ fn trace(
                             },
                         );
                         if !world.occluded(origin, target - origin, 1.0 - 1e-4) {
-                            let weight = power_heuristic(light_pdf, brdf.pdf(wo_local, wi_local));
+                            let p_brdf = brdf.pdf(wo_local, wi_local);
+                            let weight = match (reach, starts) {
+                                (Some(reach), Some(st)) => {
+                                    // Per unit area here and on the emitter, as where the
+                                    // camera path meets an emitter.
+                                    let g = cos_light.abs() / d2;
+                                    let p_light = st
+                                        .emitter_pdf(world, e.tri, e.pdf_area, e.n_front, -wi)
+                                        * surf.ng.dot(wi)
+                                        / d2;
+                                    power_heuristic_among(
+                                        reach * e.pdf_area,
+                                        &[reach * p_brdf * g, p_light],
+                                    )
+                                }
+                                _ => power_heuristic(light_pdf, p_brdf),
+                            };
                             l += beta * f * wi_local.z * le * weight / light_pdf;
                         }
                     }
@@ -331,6 +399,26 @@ fn trace(
                 }
             }
         }
+
+        // The light path joined here, where the vertex after this one would look for its light.
+        if let Some((st, lv)) = &light_vertex {
+            if depth + 1 < max_depth {
+                let here = CameraVertex {
+                    p: surf.p,
+                    ng: surf.ng,
+                    origin,
+                    frame: &frame,
+                    wo_local,
+                    brdf: &brdf,
+                    beta,
+                };
+                l += light_paths::join(world, st, lv, &here, depth + 1 < emitter_depths);
+            }
+        }
+        // A light path could have been joined at the vertex before this one (it had one).
+        last = reach
+            .filter(|_| depth < emitter_depths)
+            .map(|r| (r, surf.ng));
 
         let u_lobe = rng.next_f32();
         let u = rng.next_2d();

@@ -115,6 +115,29 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
     }
 }
 
+/// The power heuristic weight of a strategy with density `a` among strategies with densities
+/// `a` and `others` (all in one measure).
+pub fn power_heuristic_among(a: f32, others: &[f32]) -> f32 {
+    let a2 = a * a;
+    let sum = a2 + others.iter().map(|b| b * b).sum::<f32>();
+    if sum > 0.0 && sum.is_finite() {
+        a2 / sum
+    } else if a.is_infinite() {
+        1.0
+    } else {
+        0.0
+    }
+}
+
+/// A direction within `cos_max` of +z (a cone), uniform over its solid angle
+/// 2 pi (1 - cos_max); -1 gives the whole sphere.
+pub fn uniform_cone(cos_max: f32, u: Vec2) -> Vec3 {
+    let z = 1.0 - u.x * (1.0 - cos_max);
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
 /// A discrete distribution proportional to given non-negative weights, sampled by inverting its
 /// cumulative sum.
 #[derive(Clone, Debug, Default)]

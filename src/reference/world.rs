@@ -64,6 +64,8 @@ pub struct World<'s> {
     emitters: Option<Distribution>,
     /// Per triangle: probability density per unit area of light sampling landing on it.
     emitter_pdf_area: Vec<f32>,
+    /// What the emissive triangles send out together (W; the textures at their average).
+    emitter_power: f32,
     pub lights: Vec<Light>,
     /// Per material: it has an alpha cutoff that can reject hits.
     masked: Vec<bool>,
@@ -152,6 +154,8 @@ impl<'s> World<'s> {
             }
         }
         let emitters = Distribution::new(&weights);
+        // The weights are area x (r + g + b) x sides; a Lambertian emitter sends pi x Le x area.
+        let emitter_power = (std::f64::consts::PI / 3.0 * weights.iter().sum::<f64>()) as f32;
         let mut emitter_pdf_area = vec![0.0f32; tris.len()];
         if let Some(d) = &emitters {
             for (k, &t) in emitter_tris.iter().enumerate() {
@@ -188,6 +192,7 @@ impl<'s> World<'s> {
             emitter_tris,
             emitters,
             emitter_pdf_area,
+            emitter_power,
             lights,
             masked,
         }
@@ -255,8 +260,14 @@ impl<'s> World<'s> {
             .any(&self.tris, o, d, tmax, |t, b1, b2| self.solid(t, b1, b2))
     }
 
+    /// Where on its triangle a hit lies.
+    pub fn hit_point(&self, hit: &Hit) -> Vec3 {
+        let g = &self.tris[hit.tri as usize];
+        g.p0 + g.e1 * hit.b1 + g.e2 * hit.b2
+    }
+
     /// Unit normal of the triangle's front face.
-    fn front_normal(&self, tri: u32) -> Vec3 {
+    pub fn front_normal(&self, tri: u32) -> Vec3 {
         let g = &self.tris[tri as usize];
         g.e1.cross(g.e2).normalize() * self.info[tri as usize].front
     }
@@ -341,6 +352,18 @@ impl<'s> World<'s> {
 
     pub fn has_emitters(&self) -> bool {
         self.emitters.is_some()
+    }
+
+    /// The emissive triangles' power together (W), their textures taken at their average.
+    pub fn emitter_power(&self) -> f32 {
+        self.emitter_power
+    }
+
+    /// Whether triangle `tri` emits from its back as well as its front (a double-sided
+    /// emissive material).
+    pub fn emits_both_sides(&self, tri: u32) -> bool {
+        self.material(tri)
+            .is_some_and(|m| m.is_emissive() && m.double_sided)
     }
 
     /// A point on an emissive triangle: the triangle by power, then uniform over its area.
