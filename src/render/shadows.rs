@@ -63,6 +63,42 @@ fn perspective(eye: Vec3, dir: Vec3, fov: f32, bounds: &Aabb, resolution: u32) -
     }
 }
 
+/// An orthographic view along `d` fitted to the box `bounds` as the light sees it (its
+/// corners' extent across the light, widened by the filter's reach), not to the sphere around
+/// it: a flat ground seen by a high sun fills the map instead of a square as wide as its
+/// diagonal, so its texels are up to twice as fine along each side.
+fn directional(
+    d: Vec3,
+    bounds: &Aabb,
+    center: Vec3,
+    radius: f32,
+    resolution: u32,
+    pcf_radius: u32,
+) -> ShadowView {
+    let eye = center - d * 2.0 * radius;
+    let view = Mat4::look_to_rh(eye, d, any_up(d));
+    let (mut lo, mut hi) = (Vec3::splat(-radius), Vec3::splat(radius));
+    if !bounds.is_empty() {
+        lo = Vec3::splat(f32::INFINITY);
+        hi = Vec3::splat(f32::NEG_INFINITY);
+        for c in bounds.corners() {
+            let p = view.transform_point3(c);
+            lo = lo.min(p);
+            hi = hi.max(p);
+        }
+    }
+    // A flat box seen edge-on still needs a texel's width; the filter reads past the edge.
+    let side = (hi - lo).truncate().max(glam::Vec2::splat(radius * 1e-3));
+    let margin = side * (pcf_radius + 2) as f32 / resolution as f32;
+    let (lo2, hi2) = (lo.truncate() - margin, lo.truncate() + side + margin);
+    let proj = Mat4::orthographic_rh(lo2.x, hi2.x, lo2.y, hi2.y, 0.5 * radius, 3.5 * radius);
+    let texel = (hi2 - lo2).max_element() / resolution as f32;
+    ShadowView {
+        view_proj: proj * view,
+        info: Vec4::new(0.0, texel, 0.0, 0.0),
+    }
+}
+
 /// Whether anything inside `bounds` can land in the view (false only when all eight corners are
 /// beyond one clip plane), so a caster moving there must draw the view again.
 pub fn may_see(view_proj: &Mat4, bounds: &Aabb) -> bool {
@@ -95,23 +131,14 @@ pub fn light_views(
     };
     for l in lights {
         let views = match l.kind {
-            LightKind::Directional => {
-                let d = l.direction;
-                let eye = center - d * 2.0 * radius;
-                let view = Mat4::look_to_rh(eye, d, any_up(d));
-                let proj = Mat4::orthographic_rh(
-                    -radius,
-                    radius,
-                    -radius,
-                    radius,
-                    0.5 * radius,
-                    3.5 * radius,
-                );
-                vec![ShadowView {
-                    view_proj: proj * view,
-                    info: Vec4::new(0.0, 2.0 * radius / resolution as f32, 0.0, 0.0),
-                }]
-            }
+            LightKind::Directional => vec![directional(
+                l.direction,
+                bounds,
+                center,
+                radius,
+                resolution,
+                pcf_radius,
+            )],
             LightKind::Spot { outer_cone, .. } => {
                 let margin = (2 * pcf_radius + 2) as f32 / resolution as f32;
                 let half = (outer_cone.tan() * (1.0 + margin)).atan().clamp(0.01, 1.5);
@@ -167,5 +194,49 @@ mod frustum_tests {
         assert!(!may_see(&vp, &b([-0.5, -0.5, -30.0], [0.5, 0.5, -20.0])));
         assert!(!may_see(&vp, &b([5.0, -0.5, -3.0], [6.0, 0.5, -2.0])));
         assert!(!may_see(&vp, &Aabb::EMPTY));
+    }
+
+    /// A sun over a ground 50 m across and 10 cm thick: its view holds every corner of the
+    /// ground with the filter's margin, and its texels cover less than three quarters of the
+    /// ground a square around the bounding sphere (70.7 m across) gave each.
+    #[test]
+    fn a_suns_view_is_fitted_to_the_ground_as_it_sees_it() {
+        let ground = Aabb {
+            min: Vec3::new(-25.0, -0.1, -25.0),
+            max: Vec3::new(25.0, 0.0, 25.0),
+        };
+        let sphere_texel = ground.extent().length() / 2048.0;
+        for (elevation, azimuth) in [(90.0f32, 0.0f32), (45.0, 0.0), (45.0, 30.0), (15.0, 60.0)] {
+            let (e, a) = (elevation.to_radians(), azimuth.to_radians());
+            let d = -Vec3::new(e.cos() * a.cos(), e.sin(), e.cos() * a.sin());
+            let sun = Light {
+                name: None,
+                kind: LightKind::Directional,
+                radiance: Vec3::ONE,
+                range: None,
+                position: Vec3::ZERO,
+                direction: d,
+            };
+            let v = &light_views(&[sun], &ground, 2048, 1)[0].views[0];
+            for c in ground.corners() {
+                let p = v.view_proj.project_point3(c);
+                // Inside by the margin: 3 texels of 2048 in clip units.
+                assert!(
+                    p.x.abs() < 1.0 - 5.0 / 2048.0 && p.y.abs() < 1.0 - 5.0 / 2048.0,
+                    "sun {elevation}, {azimuth}: corner {c} at {p}"
+                );
+                assert!(
+                    (0.0..=1.0).contains(&p.z),
+                    "sun {elevation}, {azimuth}: depth {p}"
+                );
+            }
+            // The view's width along each of its axes (an orthographic row scales by 2 / width).
+            let width = |row: usize| 2.0 / v.view_proj.row(row).truncate().length();
+            let (tx, ty) = (width(0) / 2048.0, width(1) / 2048.0);
+            assert!(
+                tx * ty < 0.75 * sphere_texel * sphere_texel && v.info.y >= tx.max(ty) * 0.999,
+                "sun {elevation}, {azimuth}: texels {tx} x {ty} against {sphere_texel}"
+            );
+        }
     }
 }
