@@ -9,9 +9,9 @@
 //! power heuristic, each with its density per unit area of the path's two last vertices.
 
 use super::bvh::Hit;
-use super::offset_origin;
 use super::sampling::{cosine_hemisphere, uniform_cone, Distribution, Frame, Pcg32};
 use super::world::{punctual, World};
+use super::{offset_origin, Shading};
 use crate::scene::LightKind;
 use glam::Vec3;
 use std::f32::consts::PI;
@@ -186,28 +186,17 @@ impl LightStarts {
     }
 }
 
-/// A vertex of the camera's path, as a light path is joined to it.
-pub struct CameraVertex<'a> {
-    pub p: Vec3,
-    /// Geometric normal, on the side the path arrived from.
-    pub ng: Vec3,
-    pub origin: Vec3,
-    pub frame: &'a Frame,
-    pub wo_local: Vec3,
-    pub brdf: &'a super::brdf::Brdf,
-    /// The path's throughput up to this vertex.
-    pub beta: Vec3,
-}
-
-/// What the light path `lv` brings to the camera's vertex `a` through its one bounce, weighed
+/// What the light path `lv` brings to the camera's vertex `a` (its path's throughput `beta`)
+/// through its one bounce, weighed
 /// against the camera path's own ways of making the same path. `emitters_joined`: whether
 /// next-event estimation of the emitters runs at the vertex after `a` (a light path from an
 /// emitter is joined only where it would, so that the same paths are counted).
-pub fn join(
+pub(super) fn join(
     world: &World,
     starts: &LightStarts,
     lv: &LightVertex,
-    a: &CameraVertex,
+    a: &Shading,
+    beta: Vec3,
     emitters_joined: bool,
 ) -> Vec3 {
     if matches!(lv.from, From::Emitter { .. }) && !emitters_joined {
@@ -215,17 +204,17 @@ pub fn join(
     }
     let surf_b = {
         // Seen from a, as the camera path would meet it.
-        let to_b = world.hit_point(&lv.hit) - a.p;
+        let to_b = world.hit_point(&lv.hit) - a.surf.p;
         let d2 = to_b.length_squared();
         if !(d2 > 0.0 && d2.is_finite()) {
             return Vec3::ZERO;
         }
         world.surface(&lv.hit, -to_b / d2.sqrt())
     };
-    let to_b = surf_b.p - a.p;
+    let to_b = surf_b.p - a.surf.p;
     let d2_ab = to_b.length_squared();
     let w_ab = to_b / d2_ab.sqrt();
-    if a.ng.dot(w_ab) <= 0.0 {
+    if a.surf.ng.dot(w_ab) <= 0.0 {
         return Vec3::ZERO;
     }
     let wi_a = a.frame.to_local(w_ab);
@@ -289,5 +278,5 @@ pub fn join(
         return Vec3::ZERO;
     }
     let weight = super::sampling::power_heuristic_among(p_light, &others);
-    a.beta * f_a * wi_a.z * g_b * sent * weight / p_light
+    beta * f_a * wi_a.z * g_b * sent * weight / p_light
 }

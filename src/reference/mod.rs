@@ -25,7 +25,7 @@ use crate::output::RadianceImage;
 use crate::scene::Scene;
 use environment::EnvLight;
 use glam::Vec3;
-use light_paths::{CameraVertex, LightStarts};
+use light_paths::LightStarts;
 use rayon::prelude::*;
 use sampling::{power_heuristic, power_heuristic_among, Frame, Pcg32};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -279,142 +279,40 @@ fn trace(
         let reach = (bsdf_pdf > 0.0).then(|| bsdf_pdf * surf.ng.dot(wo).abs() / (hit.t * hit.t));
         let le = world.emission(surf.tri, surf.uv, surf.front);
         if le != Vec3::ZERO {
-            let weight = match (bsdf_pdf > 0.0, last, starts) {
-                (false, _, _) => 1.0,
-                (true, Some((reach_last, ng_last)), Some(st)) => {
-                    // Per unit area of the last vertex and of this one: its BRDF finding the
-                    // emitter, next-event estimation there, a light path landing there.
-                    let cos_light = surf.ng.dot(wo).abs();
-                    let pe = world.emitter_pdf_area(surf.tri);
-                    let n_front = world.front_normal(surf.tri);
-                    let p_brdf = reach_last * bsdf_pdf * cos_light / (hit.t * hit.t);
-                    let p_light = st.emitter_pdf(world, surf.tri, pe, n_front, wo)
-                        * ng_last.dot(d).abs()
-                        / (hit.t * hit.t);
-                    power_heuristic_among(p_brdf, &[reach_last * pe, p_light])
-                }
-                (true, _, _) => {
-                    let cos_light = surf.ng.dot(wo).abs();
-                    let light_pdf = world.emitter_pdf_area(surf.tri) * hit.t * hit.t / cos_light;
-                    power_heuristic(bsdf_pdf, light_pdf)
-                }
-            };
+            let weight = emission_weight(world, starts, &surf, wo, hit.t, bsdf_pdf, last);
             l += beta * le * weight;
         }
         let brdf = world.brdf(&surf);
         let frame = Frame::new(surf.ns);
-        let wo_local = frame.to_local(wo);
-        let origin = offset_origin(surf.p, surf.ng);
-
-        for (index, light) in world.lights.iter().enumerate() {
-            let Some((wi, dist, irradiance)) = punctual(light, surf.p) else {
-                continue;
-            };
-            if surf.ng.dot(wi) <= 0.0 {
-                continue;
-            }
-            let wi_local = frame.to_local(wi);
-            let f = brdf.eval(wo_local, wi_local);
-            if f == Vec3::ZERO {
-                continue;
-            }
-            let tmax = if dist.is_finite() {
-                (light.position - origin).length() * (1.0 - 1e-5)
-            } else {
-                f32::INFINITY
-            };
-            if !world.occluded(origin, wi, tmax) {
-                // Against a light path from this light landing here (its density per unit
-                // area here; both paths end at the light's one point).
-                let weight = match (reach, starts) {
-                    (Some(reach), Some(st)) => {
-                        let p_light =
-                            st.punctual_pdf(world, index, -wi) * surf.ng.dot(wi) / (dist * dist);
-                        power_heuristic_among(reach, &[p_light])
-                    }
-                    _ => 1.0,
-                };
-                l += beta * f * wi_local.z * irradiance * weight;
-            }
-        }
-
+        let v = Shading {
+            wo_local: frame.to_local(wo),
+            origin: offset_origin(surf.p, surf.ng),
+            surf,
+            brdf,
+            frame,
+            reach,
+        };
+        l += beta * punctual_lights(world, starts, &v);
         if world.has_emitters() && depth < emitter_depths {
-            let u_pick = rng.next_f32();
-            let u = rng.next_2d();
-            if let Some(e) = world.sample_emitter(u_pick, u) {
-                let to = e.p - surf.p;
-                let d2 = to.length_squared();
-                let wi = to / d2.sqrt();
-                let cos_light = e.n_front.dot(-wi);
-                let le = world.emission(e.tri, e.uv, cos_light > 0.0);
-                if le != Vec3::ZERO && surf.ng.dot(wi) > 0.0 && d2 > 0.0 {
-                    let wi_local = frame.to_local(wi);
-                    let f = brdf.eval(wo_local, wi_local);
-                    let light_pdf = e.pdf_area * d2 / cos_light.abs();
-                    if f != Vec3::ZERO && light_pdf > 0.0 && light_pdf.is_finite() {
-                        let target = offset_origin(
-                            e.p,
-                            if cos_light > 0.0 {
-                                e.n_front
-                            } else {
-                                -e.n_front
-                            },
-                        );
-                        if !world.occluded(origin, target - origin, 1.0 - 1e-4) {
-                            let p_brdf = brdf.pdf(wo_local, wi_local);
-                            let weight = match (reach, starts) {
-                                (Some(reach), Some(st)) => {
-                                    // Per unit area here and on the emitter, as where the
-                                    // camera path meets an emitter.
-                                    let g = cos_light.abs() / d2;
-                                    let p_light = st
-                                        .emitter_pdf(world, e.tri, e.pdf_area, e.n_front, -wi)
-                                        * surf.ng.dot(wi)
-                                        / d2;
-                                    power_heuristic_among(
-                                        reach * e.pdf_area,
-                                        &[reach * p_brdf * g, p_light],
-                                    )
-                                }
-                                _ => power_heuristic(light_pdf, p_brdf),
-                            };
-                            l += beta * f * wi_local.z * le * weight / light_pdf;
-                        }
-                    }
-                }
-            }
+            l += beta * emitter_light(world, starts, &v, rng);
         }
-
         if let Some(env) = env.filter(|e| e.is_sampled() && depth < emitter_depths) {
-            let u_pick = rng.next_f32();
-            let u = rng.next_2d();
-            if let Some((wi, light_pdf)) = env.sample(u_pick, u) {
-                if surf.ng.dot(wi) > 0.0 && light_pdf > 0.0 {
-                    let wi_local = frame.to_local(wi);
-                    let f = brdf.eval(wo_local, wi_local);
-                    if f != Vec3::ZERO && !world.occluded(origin, wi, f32::INFINITY) {
-                        let weight = power_heuristic(light_pdf, brdf.pdf(wo_local, wi_local));
-                        l += beta * f * wi_local.z * env.radiance(wi) * weight / light_pdf;
-                    }
-                }
-            }
+            l += beta * env_light(world, env, &v, rng);
         }
-
         // The light path joined here, where the vertex after this one would look for its light.
         if let Some((st, lv)) = &light_vertex {
             if depth + 1 < max_depth {
-                let here = CameraVertex {
-                    p: surf.p,
-                    ng: surf.ng,
-                    origin,
-                    frame: &frame,
-                    wo_local,
-                    brdf: &brdf,
-                    beta,
-                };
-                l += light_paths::join(world, st, lv, &here, depth + 1 < emitter_depths);
+                l += light_paths::join(world, st, lv, &v, beta, depth + 1 < emitter_depths);
             }
         }
+        let Shading {
+            surf,
+            brdf,
+            frame,
+            wo_local,
+            origin,
+            ..
+        } = v;
         // A light path could have been joined at the vertex before this one (it had one).
         last = reach
             .filter(|_| depth < emitter_depths)
@@ -443,6 +341,160 @@ fn trace(
         d = wi;
     }
     l
+}
+
+/// A vertex of the camera's path, as its light is estimated there.
+pub(crate) struct Shading {
+    surf: world::Surface,
+    brdf: brdf::Brdf,
+    frame: Frame,
+    wo_local: Vec3,
+    /// Where rays leave from (off the surface on its `ng` side).
+    origin: Vec3,
+    /// Per unit area here, the density of the last vertex's BRDF sample landing here (None for
+    /// the vertex the camera sees).
+    reach: Option<f32>,
+}
+
+/// The weight of an emitter that the camera path met at `surf` (seen along `-wo`), `t` from
+/// the last vertex, whose BRDF sample of density `bsdf_pdf` (0: the camera's ray) found it:
+/// against next-event estimation there and, where `last` says a light path could have been
+/// joined there, that light path.
+fn emission_weight(
+    world: &World,
+    starts: Option<&LightStarts>,
+    surf: &world::Surface,
+    wo: Vec3,
+    t: f32,
+    bsdf_pdf: f32,
+    last: Option<(f32, Vec3)>,
+) -> f32 {
+    if bsdf_pdf <= 0.0 {
+        return 1.0;
+    }
+    let cos_light = surf.ng.dot(wo).abs();
+    let pe = world.emitter_pdf_area(surf.tri);
+    match (last, starts) {
+        (Some((reach_last, ng_last)), Some(st)) => {
+            // Per unit area of the last vertex and of this one: its BRDF finding the emitter,
+            // next-event estimation there, a light path landing there.
+            let n_front = world.front_normal(surf.tri);
+            let p_brdf = reach_last * bsdf_pdf * cos_light / (t * t);
+            let p_light =
+                st.emitter_pdf(world, surf.tri, pe, n_front, wo) * ng_last.dot(wo).abs() / (t * t);
+            power_heuristic_among(p_brdf, &[reach_last * pe, p_light])
+        }
+        _ => power_heuristic(bsdf_pdf, pe * t * t / cos_light),
+    }
+}
+
+/// The punctual lights' light leaving `v` towards the camera path, each weighed against a
+/// light path from it landing there (their densities per unit area there; both end at the
+/// light's one point).
+fn punctual_lights(world: &World, starts: Option<&LightStarts>, v: &Shading) -> Vec3 {
+    let mut l = Vec3::ZERO;
+    for (index, light) in world.lights.iter().enumerate() {
+        let Some((wi, dist, irradiance)) = punctual(light, v.surf.p) else {
+            continue;
+        };
+        if v.surf.ng.dot(wi) <= 0.0 {
+            continue;
+        }
+        let wi_local = v.frame.to_local(wi);
+        let f = v.brdf.eval(v.wo_local, wi_local);
+        if f == Vec3::ZERO {
+            continue;
+        }
+        let tmax = if dist.is_finite() {
+            (light.position - v.origin).length() * (1.0 - 1e-5)
+        } else {
+            f32::INFINITY
+        };
+        if world.occluded(v.origin, wi, tmax) {
+            continue;
+        }
+        let weight = match (v.reach, starts) {
+            (Some(reach), Some(st)) => {
+                let p_light =
+                    st.punctual_pdf(world, index, -wi) * v.surf.ng.dot(wi) / (dist * dist);
+                power_heuristic_among(reach, &[p_light])
+            }
+            _ => 1.0,
+        };
+        l += f * wi_local.z * irradiance * weight;
+    }
+    l
+}
+
+/// Next-event estimation of one point on the emitters from `v`, weighed against `v`'s BRDF
+/// finding it and, past the camera's first vertex, a light path from it landing at `v`.
+fn emitter_light(
+    world: &World,
+    starts: Option<&LightStarts>,
+    v: &Shading,
+    rng: &mut Pcg32,
+) -> Vec3 {
+    let u_pick = rng.next_f32();
+    let u = rng.next_2d();
+    let Some(e) = world.sample_emitter(u_pick, u) else {
+        return Vec3::ZERO;
+    };
+    let to = e.p - v.surf.p;
+    let d2 = to.length_squared();
+    let wi = to / d2.sqrt();
+    let cos_light = e.n_front.dot(-wi);
+    let le = world.emission(e.tri, e.uv, cos_light > 0.0);
+    if le == Vec3::ZERO || v.surf.ng.dot(wi) <= 0.0 || d2 <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let wi_local = v.frame.to_local(wi);
+    let f = v.brdf.eval(v.wo_local, wi_local);
+    let light_pdf = e.pdf_area * d2 / cos_light.abs();
+    if f == Vec3::ZERO || !(light_pdf > 0.0 && light_pdf.is_finite()) {
+        return Vec3::ZERO;
+    }
+    let side = if cos_light > 0.0 {
+        e.n_front
+    } else {
+        -e.n_front
+    };
+    let target = offset_origin(e.p, side);
+    if world.occluded(v.origin, target - v.origin, 1.0 - 1e-4) {
+        return Vec3::ZERO;
+    }
+    let p_brdf = v.brdf.pdf(v.wo_local, wi_local);
+    let weight = match (v.reach, starts) {
+        (Some(reach), Some(st)) => {
+            // Per unit area here and on the emitter, as where the camera path meets an
+            // emitter.
+            let g = cos_light.abs() / d2;
+            let p_light =
+                st.emitter_pdf(world, e.tri, e.pdf_area, e.n_front, -wi) * v.surf.ng.dot(wi) / d2;
+            power_heuristic_among(reach * e.pdf_area, &[reach * p_brdf * g, p_light])
+        }
+        _ => power_heuristic(light_pdf, p_brdf),
+    };
+    f * wi_local.z * le * weight / light_pdf
+}
+
+/// Next-event estimation of the environment image from `v`, weighed against `v`'s BRDF
+/// leaving the scene the same way.
+fn env_light(world: &World, env: &EnvLight, v: &Shading, rng: &mut Pcg32) -> Vec3 {
+    let u_pick = rng.next_f32();
+    let u = rng.next_2d();
+    let Some((wi, light_pdf)) = env.sample(u_pick, u) else {
+        return Vec3::ZERO;
+    };
+    if v.surf.ng.dot(wi) <= 0.0 || light_pdf <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let wi_local = v.frame.to_local(wi);
+    let f = v.brdf.eval(v.wo_local, wi_local);
+    if f == Vec3::ZERO || world.occluded(v.origin, wi, f32::INFINITY) {
+        return Vec3::ZERO;
+    }
+    let weight = power_heuristic(light_pdf, v.brdf.pdf(v.wo_local, wi_local));
+    f * wi_local.z * env.radiance(wi) * weight / light_pdf
 }
 
 #[cfg(test)]
