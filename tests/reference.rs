@@ -918,11 +918,9 @@ fn box_faces(s: &mut Scene, min: Vec3, max: Vec3, inward: bool, material: u32) {
         for sign in [-1.0f32, 1.0] {
             let mut n = Vec3::ZERO;
             n[axis] = sign;
-            let (u, v) = (
-                Vec3::new(0.0, 0.0, 0.0).with_index((axis + 1) % 3, 1.0),
-                Vec3::new(0.0, 0.0, 0.0).with_index((axis + 2) % 3, 1.0),
-            );
-            let (u, v) = (u * h, v * h);
+            let (mut u, mut v) = (Vec3::ZERO, Vec3::ZERO);
+            u[(axis + 1) % 3] = h[(axis + 1) % 3];
+            v[(axis + 2) % 3] = h[(axis + 2) % 3];
             let f = c + n * h;
             let mut corners = [f - u - v, f + u - v, f + u + v, f - u + v];
             let facing = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
@@ -931,17 +929,6 @@ fn box_faces(s: &mut Scene, min: Vec3, max: Vec3, inward: bool, material: u32) {
             }
             quad(s, corners, material);
         }
-    }
-}
-
-trait WithIndex {
-    fn with_index(self, i: usize, x: f32) -> Self;
-}
-
-impl WithIndex for Vec3 {
-    fn with_index(mut self, i: usize, x: f32) -> Self {
-        self[i] = x;
-        self
     }
 }
 

@@ -48,7 +48,8 @@ enum From {
     },
 }
 
-/// Density of a spot light's directions: uniform over its outer cone.
+/// The cosine of the cone a light's light paths leave in, uniformly over its solid angle: a
+/// spot's outer cone, a point light's whole sphere (-1); none for a directional light.
 fn spot_cos_max(kind: &LightKind) -> Option<f32> {
     match *kind {
         LightKind::Spot { outer_cone, .. } => Some(outer_cone.cos()),
@@ -125,15 +126,12 @@ impl LightStarts {
         n_front: Vec3,
         dir: Vec3,
     ) -> f32 {
-        let side = if world.emits_both_sides(tri) {
-            0.5
-        } else {
-            1.0
-        };
+        let both = world.emits_both_sides(tri);
         let cos = n_front.dot(dir);
-        if !world.emits_both_sides(tri) && cos <= 0.0 {
+        if !both && cos <= 0.0 {
             return 0.0;
         }
+        let side = if both { 0.5 } else { 1.0 };
         self.emitter_share * pdf_area * side * cos.abs() / PI
     }
 

@@ -105,14 +105,7 @@ pub fn uniform_triangle(u: Vec2) -> (f32, f32) {
 
 /// The power heuristic (beta = 2) weight of a strategy with density `a` against one with `b`.
 pub fn power_heuristic(a: f32, b: f32) -> f32 {
-    let (a2, b2) = (a * a, b * b);
-    if a2 + b2 > 0.0 && (a2 + b2).is_finite() {
-        a2 / (a2 + b2)
-    } else if a.is_infinite() {
-        1.0
-    } else {
-        0.0
-    }
+    power_heuristic_among(a, &[b])
 }
 
 /// The power heuristic weight of a strategy with density `a` among strategies with densities
