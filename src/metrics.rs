@@ -92,23 +92,34 @@ pub fn try_compare(
             return Err(MetricsError::NonFinite { which, count });
         }
     }
-    let (mut rel, mut abs, mut sq) = (0.0f64, 0.0f64, 0.0f64);
+    let (mut abs, mut sq) = (0.0f64, 0.0f64);
     for (pa, pr) in a.pixels.iter().zip(&reference.pixels) {
         for (&va, &vr) in pa.iter().zip(pr) {
-            let (va, vr) = (va as f64, vr as f64);
-            let e = va - vr;
-            rel += e * e / (vr * vr + REL_MSE_EPSILON);
+            let e = va as f64 - vr as f64;
             abs += e.abs();
             sq += e * e;
         }
     }
     let n = (a.pixels.len() * 3) as f64;
     Ok(Metrics {
-        rel_mse: rel / n,
+        rel_mse: rel_mse(a, reference, 1.0),
         mae: abs / n,
         rmse: (sq / n).sqrt(),
         flip: flip(a, reference, exposure),
     })
+}
+
+/// relMSE of `a` against `reference` (same size), both scaled by `scale` first: at a display
+/// exposure of 2^e, `scale` = 2^e.
+pub fn rel_mse(a: &RadianceImage, reference: &RadianceImage, scale: f64) -> f64 {
+    let mut rel = 0.0f64;
+    for (pa, pr) in a.pixels.iter().zip(&reference.pixels) {
+        for (&va, &vr) in pa.iter().zip(pr) {
+            let (va, vr) = (va as f64 * scale, vr as f64 * scale);
+            rel += (va - vr) * (va - vr) / (vr * vr + REL_MSE_EPSILON);
+        }
+    }
+    rel / (a.pixels.len() * 3).max(1) as f64
 }
 
 /// Mean FLIP error between the display images of `a` and `reference` (same size).

@@ -210,11 +210,11 @@ fn reference(r: ReferenceCmd) -> Result<()> {
     let opts = r.selection.run_options()?;
     let records = corpus::run::select(corpus::records(&opts.dir)?, &opts);
     let refs = corpus::run::ensure_references(&opts, &records)?;
-    println!("| scene | spp | noise | seconds |\n|---|---|---|---|");
+    println!("| scene | spp | noise | at display | seconds |\n|---|---|---|---|---|");
     for r in &refs {
         println!(
-            "| {} | {} | {:.5} | {:.1} |",
-            r.info.scene, r.info.spp, r.info.noise, r.info.seconds
+            "| {} | {} | {:.5} | {:.5} | {:.1} |",
+            r.info.scene, r.info.spp, r.info.noise, r.info.display_noise, r.info.seconds
         );
     }
     Ok(())

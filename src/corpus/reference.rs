@@ -3,7 +3,7 @@
 //! made again from the same seed, or a run stopped half way, renders nothing twice.
 
 use super::{io_error, CorpusError, SceneRecord};
-use crate::metrics::compare;
+use crate::metrics::rel_mse;
 use crate::output::{load_exr, save, write_bytes_atomic, RadianceImage};
 use crate::reference::{render_full, ReferenceSettings};
 use serde::{Deserialize, Serialize};
@@ -12,8 +12,9 @@ use std::path::{Path, PathBuf};
 
 /// Bumped when the path tracer changes what it computes, or how far from converged it is at
 /// a number of samples, so that cached references are made again (2: light paths, whose
-/// references of rooms with a lamp near a wall are far less noisy).
-pub const REFERENCE_VERSION: u32 = 2;
+/// references of rooms with a lamp near a wall are far less noisy; 3: the noise of dark
+/// images judged at their display exposure too, [`noise_of`]).
+pub const REFERENCE_VERSION: u32 = 3;
 
 /// How the references are made.
 #[derive(Clone, Debug)]
@@ -57,6 +58,10 @@ pub struct ReferenceInfo {
     /// relMSE of the two halves against each other, over 4: about the kept image's own relMSE
     /// against the converged one, which adds to every error measured against it.
     pub noise: f64,
+    /// The same at the display exposure (both halves scaled by 2^`exposure`), where FLIP sees
+    /// the images: larger than `noise` for images darker than the display's key.
+    #[serde(default)]
+    pub display_noise: f64,
     pub seconds: f64,
     /// Mean radiance (the three channels' mean over the pixels).
     pub mean: f64,
@@ -177,8 +182,8 @@ fn path_trace(
         spp_half += add;
         round += 1;
         let [a, b] = [halves[0].as_ref().unwrap(), halves[1].as_ref().unwrap()];
-        noise = compare(a, b).rel_mse / 4.0;
-        if noise <= opts.noise_target || 2 * (spp_half + spp_half) > opts.spp_max {
+        noise = noise_of(a, b);
+        if noise.max() <= opts.noise_target || 2 * (spp_half + spp_half) > opts.spp_max {
             break;
         }
     }
@@ -191,12 +196,39 @@ fn path_trace(
         width: opts.width,
         height: opts.height,
         spp: 2 * spp_half,
-        noise,
+        noise: noise.radiance,
+        display_noise: noise.display,
         seconds: start.elapsed().as_secs_f64(),
         mean,
         exposure: exposure_for(&image),
     };
     Reference { image, info }
+}
+
+/// A reference's own error, estimated from its two halves: relMSE of one against the other,
+/// over 4, on the radiance (as the corpus measures the renderer) and at the display exposure
+/// of their mean (as FLIP sees both images). relMSE's floor of 0.01 in the denominator hides
+/// the noise of a dark image: a room lit by a dim sky through one window, whose pixels are
+/// about 0.002, passed at 128 samples (0.0004) while its display was snow.
+#[derive(Clone, Copy, Debug)]
+pub struct Noise {
+    pub radiance: f64,
+    pub display: f64,
+}
+
+impl Noise {
+    /// The larger: the rounds go on until both are under the target.
+    pub fn max(&self) -> f64 {
+        self.radiance.max(self.display)
+    }
+}
+
+pub fn noise_of(a: &RadianceImage, b: &RadianceImage) -> Noise {
+    let scale = 2f64.powf(exposure_for(&mix(a, 1, b, 1)) as f64);
+    Noise {
+        radiance: rel_mse(a, b, 1.0) / 4.0,
+        display: rel_mse(a, b, scale) / 4.0,
+    }
 }
 
 /// The mean of `a` (of `na` samples) and `b` (of `nb`), weighed by their samples.
@@ -240,5 +272,36 @@ mod tests {
             pixels: vec![[0.045; 3], [0.045; 3]],
         };
         assert!((exposure_for(&img) - 2.0).abs() < 0.01);
+    }
+
+    /// Two halves of an image of `level`, their pixels `spread` above and below it by turns.
+    fn dark_halves(level: f32, spread: f32) -> (RadianceImage, RadianceImage) {
+        let img = |sign: f32| RadianceImage {
+            width: 4,
+            height: 4,
+            pixels: (0..16)
+                .map(|i| {
+                    let s = if i % 2 == 0 { sign } else { -sign };
+                    [level * (1.0 + s * spread); 3]
+                })
+                .collect(),
+        };
+        (img(1.0), img(-1.0))
+    }
+
+    #[test]
+    fn a_dark_references_noise_is_judged_at_its_display_exposure() {
+        let (a, b) = dark_halves(0.002, 0.2);
+        let n = noise_of(&a, &b);
+        // (2 * 0.0004)^2 / (0.002^2 + 0.01) / 4: far under any target.
+        assert!(n.radiance < 1e-4, "{n:?}");
+        // Scaled by about 87 (0.18 over the log-average, its guard of 1e-4 included), pixels
+        // of 0.14 and 0.21 differ by 0.07: about 0.128 / 4.
+        assert!((n.display - 0.0316).abs() < 0.001, "{n:?}");
+        assert_eq!(n.max(), n.display);
+        // A bright image's noise is its radiance's: the display scales it down.
+        let (a, b) = dark_halves(2.0, 0.01);
+        let n = noise_of(&a, &b);
+        assert_eq!(n.max(), n.radiance, "{n:?}");
     }
 }

@@ -58,6 +58,9 @@ pub struct SceneResult {
     pub still_frame_ms: f64,
     /// The reference's own relMSE, estimated (it adds to `rel_mse`).
     pub reference_noise: f64,
+    /// The same at the display exposure, as FLIP sees the images.
+    #[serde(default)]
+    pub reference_display_noise: f64,
     pub reference_spp: u32,
     pub validation_messages: usize,
     pub description: String,
@@ -101,6 +104,9 @@ pub struct ClassSummary {
     pub first_frame_ms_median: f64,
     /// The largest reference noise among the class's scenes.
     pub reference_noise_max: f64,
+    /// The largest at the display exposure.
+    #[serde(default)]
+    pub reference_display_noise_max: f64,
 }
 
 /// What a run writes to results.json.
@@ -168,10 +174,11 @@ pub fn ensure_references(
         let reference = reference::get(&opts.dir, &opts.cache, r, &opts.references)?;
         if m {
             log::debug!(
-                "{}: {} spp, noise {:.5}, {:.1} s",
+                "{}: {} spp, noise {:.5} ({:.5} at display), {:.1} s",
                 r.name,
                 reference.info.spp,
                 reference.info.noise,
+                reference.info.display_noise,
                 reference.info.seconds
             );
             bar.inc(1);
@@ -261,6 +268,7 @@ pub fn run(ctx: &Arc<Context>, opts: &RunOptions) -> Result<Report, CorpusError>
             first_frame_ms: first,
             still_frame_ms: still,
             reference_noise: reference.info.noise,
+            reference_display_noise: reference.info.display_noise,
             reference_spp: reference.info.spp,
             validation_messages,
             description: record.description.clone(),
@@ -303,6 +311,10 @@ fn summary(class: &str, scenes: &[&SceneResult]) -> ClassSummary {
         still_frame_ms_median: median(&|s| s.still_frame_ms),
         first_frame_ms_median: median(&|s| s.first_frame_ms),
         reference_noise_max: scenes.iter().map(|s| s.reference_noise).fold(0.0, f64::max),
+        reference_display_noise_max: scenes
+            .iter()
+            .map(|s| s.reference_display_noise)
+            .fold(0.0, f64::max),
     }
 }
 
@@ -385,8 +397,8 @@ pub fn markdown(report: &Report, worst: usize) -> String {
         report.command_line
     );
     s.push_str(
-        "| class | scenes | relMSE median | p90 | worst | FLIP median | p90 | worst | mean off by, p90 | worst | still frame | first frame | reference noise, max |\n\
-         |---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
+        "| class | scenes | relMSE median | p90 | worst | FLIP median | p90 | worst | mean off by, p90 | worst | still frame | first frame | reference noise, max | at display |\n\
+         |---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let mark = |v: f64, goal: f64| {
         if v <= goal {
@@ -397,7 +409,7 @@ pub fn markdown(report: &Report, worst: usize) -> String {
     };
     for c in report.classes.iter().chain(std::iter::once(&report.all)) {
         s.push_str(&format!(
-            "| {} | {} | {:.4} | {} | {} ({}) | {:.3} | {} | {:.3} | {} | {:.1}% ({}) | {:.0} ms | {:.0} ms | {:.4} |\n",
+            "| {} | {} | {:.4} | {} | {} ({}) | {:.3} | {} | {:.3} | {} | {:.1}% ({}) | {:.0} ms | {:.0} ms | {:.4} | {:.4} |\n",
             c.class,
             c.scenes,
             c.rel_mse.median,
@@ -413,6 +425,7 @@ pub fn markdown(report: &Report, worst: usize) -> String {
             c.still_frame_ms_median,
             c.first_frame_ms_median,
             c.reference_noise_max,
+            c.reference_display_noise_max,
         ));
     }
     s.push_str(&format!(
@@ -479,6 +492,7 @@ mod tests {
             still_frame_ms_median: 1.0,
             first_frame_ms_median: 1.0,
             reference_noise_max: noise,
+            reference_display_noise_max: noise,
         };
         Report {
             command_line: String::new(),
