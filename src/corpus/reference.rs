@@ -223,6 +223,7 @@ impl Noise {
     }
 }
 
+/// The noise of the mean of halves `a` and `b` (equal in samples), both ways.
 pub fn noise_of(a: &RadianceImage, b: &RadianceImage) -> Noise {
     let scale = 2f64.powf(exposure_for(&mix(a, 1, b, 1)) as f64);
     Noise {
