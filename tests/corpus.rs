@@ -164,5 +164,39 @@ fn the_held_out_slice_is_no_worse_than_recorded() {
     let report: Report = corpus::run::load_report(&out.join("results.json")).unwrap();
     assert_eq!(report.scenes.len(), 5);
     assert!(report.scenes.iter().all(|s| s.split == Split::HeldOut));
+
+    // The run beside the recorded one: a row per class and all, by the run's folder.
+    let (ok, table, err) = voxgi(&[
+        "corpus",
+        "compare",
+        baseline.to_str().unwrap(),
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    for class in [
+        "openings",
+        "emitters",
+        "materials",
+        "objects",
+        "scale",
+        "all",
+    ] {
+        assert!(
+            table.contains(&format!("| {class} | ")),
+            "{class}:\n{table}"
+        );
+    }
+    let missing = dir.join("no-such-run");
+    let (ok, _, err) = voxgi(&[
+        "corpus",
+        "compare",
+        baseline.to_str().unwrap(),
+        missing.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(
+        err.contains("no-such-run") && err.lines().count() == 1,
+        "{err}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -33,6 +33,24 @@ enum CorpusCommand {
     /// OUT/results.json and the worst scenes beside their references (OUT/worst-NAME.png).
     /// Missing references are path-traced first.
     Run(Box<RunCmd>),
+    /// Two runs side by side: per class before -> after, and the scenes that moved
+    ///
+    /// BEFORE and AFTER are the results.json of two `corpus run`s (or their folders). Prints a
+    /// row per class (relMSE median, 90th percentile and worst, FLIP median and 90th
+    /// percentile, the image means' 90th percentile, how many scenes got better and worse),
+    /// then each scene whose relMSE moved by more than --moved.
+    Compare(CompareCmd),
+}
+
+#[derive(Args)]
+struct CompareCmd {
+    /// The earlier run's results.json, or its folder
+    before: PathBuf,
+    /// The later run's results.json, or its folder
+    after: PathBuf,
+    /// A scene counts as moved (better or worse) past this change of its relMSE
+    #[arg(long, default_value_t = corpus::compare::MOVED)]
+    moved: f64,
 }
 
 fn split(s: &str) -> Result<Split, String> {
@@ -186,7 +204,25 @@ pub fn corpus(c: CorpusCmd) -> Result<()> {
         CorpusCommand::Generate(g) => generate(g),
         CorpusCommand::Reference(r) => reference(r),
         CorpusCommand::Run(r) => run(*r),
+        CorpusCommand::Compare(c) => compare(c),
     }
+}
+
+fn compare(c: CompareCmd) -> Result<()> {
+    if !(c.moved.is_finite() && c.moved >= 0.0) {
+        bail!("--moved {} must be a number of 0 or more", c.moved);
+    }
+    let load = |p: &PathBuf| {
+        let file = if p.is_dir() {
+            p.join("results.json")
+        } else {
+            p.clone()
+        };
+        corpus::run::load_report(&file)
+    };
+    let (before, after) = (load(&c.before)?, load(&c.after)?);
+    print!("{}", corpus::compare::markdown(&before, &after, c.moved));
+    Ok(())
 }
 
 fn generate(g: GenerateCmd) -> Result<()> {

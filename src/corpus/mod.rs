@@ -9,6 +9,7 @@
 //! commands and the tables.
 
 mod classes;
+pub mod compare;
 mod draft;
 mod draw;
 pub mod reference;
@@ -29,6 +30,8 @@ pub enum CorpusError {
     Io { path: PathBuf, reason: String },
     #[error("{path}: not a scene record: {reason}")]
     Record { path: PathBuf, reason: String },
+    #[error("{path}: not the results.json of a corpus run: {reason}")]
+    Report { path: PathBuf, reason: String },
     #[error("{path}: no scenes (make them with `voxgi corpus generate --out {path}`)")]
     Empty { path: PathBuf },
     #[error("{path}: {reason}")]

@@ -318,7 +318,8 @@ fn summary(class: &str, scenes: &[&SceneResult]) -> ClassSummary {
     }
 }
 
-fn summarize(ctx: &Arc<Context>, opts: &RunOptions, scenes: Vec<SceneResult>) -> Report {
+/// The rows of the table: each class the scenes hold, and all of them.
+fn summaries(scenes: &[SceneResult]) -> (Vec<ClassSummary>, ClassSummary) {
     let classes = Class::ALL
         .iter()
         .filter_map(|c| {
@@ -326,7 +327,11 @@ fn summarize(ctx: &Arc<Context>, opts: &RunOptions, scenes: Vec<SceneResult>) ->
             (!of.is_empty()).then(|| summary(c.name(), &of))
         })
         .collect();
-    let all = summary("all", &scenes.iter().collect::<Vec<_>>());
+    (classes, summary("all", &scenes.iter().collect::<Vec<_>>()))
+}
+
+fn summarize(ctx: &Arc<Context>, opts: &RunOptions, scenes: Vec<SceneResult>) -> Report {
+    let (classes, all) = summaries(&scenes);
     Report {
         command_line: opts.command_line.clone(),
         split: opts.split,
@@ -466,15 +471,49 @@ pub fn regressions(report: &Report, baseline: &Report) -> Vec<String> {
 /// Reads a report written by an earlier run (its results.json).
 pub fn load_report(path: &Path) -> Result<Report, CorpusError> {
     let text = std::fs::read_to_string(path).map_err(|e| io_error(path, e))?;
-    serde_json::from_str(&text).map_err(|e| CorpusError::Record {
+    serde_json::from_str(&text).map_err(|e| CorpusError::Report {
         path: path.to_path_buf(),
         reason: e.to_string(),
     })
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+
+    /// A scene's result with its relMSE; the rest plain.
+    pub(crate) fn scene_result(name: &str, class: &str, rel_mse: f64) -> SceneResult {
+        SceneResult {
+            name: name.into(),
+            class: class.into(),
+            split: Split::HeldOut,
+            rel_mse,
+            flip: 0.1,
+            mean_ratio: 1.0,
+            first_frame_ms: 1.0,
+            still_frame_ms: 1.0,
+            reference_noise: 0.001,
+            reference_display_noise: 0.001,
+            reference_spp: 64,
+            validation_messages: 0,
+            description: String::new(),
+        }
+    }
+
+    /// A report of these scenes, its table made as a run makes it.
+    pub(crate) fn report_of(scenes: Vec<SceneResult>) -> Report {
+        let (classes, all) = summaries(&scenes);
+        Report {
+            command_line: String::new(),
+            split: Some(Split::HeldOut),
+            width: 1,
+            height: 1,
+            device: String::new(),
+            classes,
+            all,
+            scenes,
+        }
+    }
 
     fn report(p90: f64, noise: f64) -> Report {
         let spread = |v: f64| Spread {
