@@ -192,7 +192,7 @@ struct RunCmd {
     #[arg(long)]
     save_images: bool,
     /// Fail when a class's 90th-percentile relMSE grows past this earlier run's (its
-    /// results.json) by more than the references' noise
+    /// results.json, or its folder) by more than the references' noise
     #[arg(long, value_name = "FILE.json")]
     baseline: Option<PathBuf>,
     #[command(flatten)]
@@ -212,15 +212,8 @@ fn compare(c: CompareCmd) -> Result<()> {
     if !(c.moved.is_finite() && c.moved >= 0.0) {
         bail!("--moved {} must be a number of 0 or more", c.moved);
     }
-    let load = |p: &PathBuf| {
-        let file = if p.is_dir() {
-            p.join("results.json")
-        } else {
-            p.clone()
-        };
-        corpus::run::load_report(&file)
-    };
-    let (before, after) = (load(&c.before)?, load(&c.after)?);
+    let before = corpus::run::load_report(&c.before)?;
+    let after = corpus::run::load_report(&c.after)?;
     print!("{}", corpus::compare::markdown(&before, &after, c.moved));
     Ok(())
 }

@@ -468,8 +468,10 @@ pub fn regressions(report: &Report, baseline: &Report) -> Vec<String> {
     out
 }
 
-/// Reads a report written by an earlier run (its results.json).
+/// Reads a report written by an earlier run: its results.json, or the run's folder.
 pub fn load_report(path: &Path) -> Result<Report, CorpusError> {
+    let file = path.join("results.json");
+    let path = if path.is_dir() { file.as_path() } else { path };
     let text = std::fs::read_to_string(path).map_err(|e| io_error(path, e))?;
     serde_json::from_str(&text).map_err(|e| CorpusError::Report {
         path: path.to_path_buf(),
